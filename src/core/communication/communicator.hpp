@@ -1,0 +1,45 @@
+// The one interface every collective operation goes through. On one rank the
+// reductions are no-ops; the MPI domain-decomposition issue extends this class
+// (Cartesian topology, halo and ghost exchange) without touching its users.
+#pragma once
+
+#include <mpi.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace pyoif {
+
+class Communicator {
+public:
+  /** Wraps MPI_COMM_WORLD (MPI is initialised by the Python package via mpi4py,
+   *  or here if nobody has done it yet). */
+  Communicator();
+  explicit Communicator(MPI_Comm comm) : m_comm(comm) { query(); }
+
+  int rank() const { return m_rank; }
+  int size() const { return m_size; }
+  bool is_root() const { return m_rank == 0; }
+  MPI_Comm comm() const { return m_comm; }
+
+  /** In-place sum over ranks; one call for a whole array (e.g. all cells' area
+   *  and volume together), so the per-step cost is one reduction. */
+  void allreduce_sum(double* data, std::size_t n) const;
+  void allreduce_sum(std::vector<double>& v) const { allreduce_sum(v.data(), v.size()); }
+  double allreduce_sum(double x) const {
+    allreduce_sum(&x, 1);
+    return x;
+  }
+  double allreduce_max(double x) const;
+  long allreduce_sum(long x) const;
+  /** True on every rank when it is true on any rank (for error agreement). */
+  bool any(bool flag) const;
+
+private:
+  void query();
+  MPI_Comm m_comm = MPI_COMM_WORLD;
+  int m_rank = 0;
+  int m_size = 1;
+};
+
+}  // namespace pyoif

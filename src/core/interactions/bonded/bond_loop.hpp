@@ -1,0 +1,85 @@
+// The generic bond loop, written once for every bonded interaction: gathers
+// the bond's particles (minimum image relative to the first), calls the
+// interaction's forces(), hands the result to a sink (adding forces, or
+// summing energies per cell, ...). Interactions that need a pass over all
+// their bonds first (per-cell area/volume sums, node normals) define prepare().
+#pragma once
+
+#include "communication/communicator.hpp"
+#include "interactions/bonded/bond_group.hpp"
+#include "particles/particle_store.hpp"
+#include "system/box_geometry.hpp"
+#include "utils/errors.hpp"
+
+#include <array>
+#include <sstream>
+#include <type_traits>
+
+namespace pyoif {
+
+/** What an interaction's forces() sees of one bond. */
+template <int K> struct BondInput {
+  std::array<Vec3, K> x;  ///< positions, x[k>0] as minimum image relative to x[0]
+  std::array<Vec3, K> v;  ///< velocities
+  const double* reference = nullptr;  ///< per-bond reference values (or nullptr)
+  int mol_id = 0;  ///< cell (molecule) of the first particle
+  std::size_t bond_index = 0;
+};
+
+namespace detail {
+template <class IA, class = void> struct has_prepare : std::false_type {};
+template <class IA>
+struct has_prepare<IA, std::void_t<decltype(std::declval<IA&>().prepare(
+                           std::declval<const BondGroup&>(), std::declval<const ParticleStore&>(),
+                           std::declval<const BoxGeometry&>(), std::declval<const Communicator&>()))>>
+    : std::true_type {};
+}  // namespace detail
+
+/** Run the interaction's prepare() if it has one. */
+template <class IA>
+void prepare_bonds(IA& ia, const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
+                   const Communicator& comm) {
+  if constexpr (detail::has_prepare<IA>::value)
+    ia.prepare(group, p, box, comm);
+}
+
+/** Visit every bond: sink(local_indices, forces, energy, input). */
+template <class IA, class Sink>
+void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
+                   const BoxGeometry& box, double time, Sink&& sink) {
+  constexpr int K = IA::n_particles;
+  BondInput<K> in;
+  std::array<int, K> idx;
+  std::array<Vec3, K> f;
+  const std::size_t n = group.size();
+  for (std::size_t b = 0; b < n; ++b) {
+    const int* ids = group.bond(b);
+    for (int k = 0; k < K; ++k) {
+      idx[k] = p.index(ids[k]);
+      if (idx[k] < 0)
+        throw SimulationInstability(std::string(IA::name) + " bond refers to particle " +
+                                    std::to_string(ids[k]) + ", which does not exist");
+    }
+    in.x[0] = p.pos[idx[0]];
+    in.v[0] = p.vel[idx[0]];
+    for (int k = 1; k < K; ++k) {
+      in.x[k] = in.x[0] + box.minimum_image(p.pos[idx[k]], p.pos[idx[0]]);
+      in.v[k] = p.vel[idx[k]];
+    }
+    in.reference = group.reference(b);
+    in.mol_id = p.mol_id[idx[0]];
+    in.bond_index = b;
+    double energy = 0.0;
+    if (!ia.forces(in, f, energy)) {
+      std::ostringstream msg;
+      msg << IA::name << " bond between particles";
+      for (int k = 0; k < K; ++k)
+        msg << ' ' << ids[k];
+      msg << " broke at time " << time << " (stretched beyond its cutoff or degenerate)";
+      throw SimulationInstability(msg.str());
+    }
+    sink(idx, f, energy, in);
+  }
+}
+
+}  // namespace pyoif

@@ -1,0 +1,78 @@
+// Linked cells + Verlet list with skin. At every re-sort the local particles are
+// folded into the box, ghost copies are made of those within the interaction
+// range of a periodic face (periodic images are ghosts, as neighbouring
+// subdomains will be with MPI), particles and ghosts are binned into cells of
+// at least the range, and the pair list is built from each cell's half shell.
+// Between re-sorts only the ghost positions are refreshed.
+#pragma once
+
+#include "particles/particle_store.hpp"
+#include "system/box_geometry.hpp"
+
+#include <array>
+#include <cstdint>
+#include <unordered_set>
+#include <vector>
+
+namespace pyoif {
+
+class CellSystem {
+public:
+  double skin = 0.4;
+
+  /** Pairs of combined indices (local, or ghost as n_local + g), each physical
+   *  pair-and-image exactly once, within cutoff + skin at the last re-sort. */
+  const std::vector<std::array<int, 2>>& pairs() const { return m_pairs; }
+
+  /** Fold, make ghosts, bin, build the pair list for interaction range max_cut. */
+  void rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut);
+  /** True when some particle moved more than skin/2 since the last re-sort or
+   *  the structure was invalidated. Throws SimulationInstability on a
+   *  non-finite position. */
+  bool needs_rebuild(const ParticleStore& p, double time) const;
+  void invalidate() { m_valid = false; }
+  /** Refresh ghost positions from their origins (MPI: ghost exchange). */
+  void update_ghosts(ParticleStore& p, const BoxGeometry& box) const;
+  /** Add the forces accumulated on ghosts to their owners (MPI: reverse exchange). */
+  void collect_ghost_forces(ParticleStore& p) const;
+
+  /** Pairs of particle ids that must not interact (e.g. mesh neighbours). */
+  void add_exclusion(int id1, int id2) {
+    m_exclusions.insert(key(id1, id2));
+    invalidate();
+  }
+  void remove_exclusion(int id1, int id2) {
+    m_exclusions.erase(key(id1, id2));
+    invalidate();
+  }
+  bool excluded(int id1, int id2) const {
+    return !m_exclusions.empty() && m_exclusions.count(key(id1, id2));
+  }
+  void clear_exclusions() {
+    m_exclusions.clear();
+    invalidate();
+  }
+  std::size_t n_rebuilds() const { return m_n_rebuilds; }
+  double range() const { return m_range; }
+
+private:
+  static std::uint64_t key(int a, int b) {
+    if (a > b)
+      std::swap(a, b);
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+           static_cast<std::uint32_t>(b);
+  }
+  void make_ghosts(ParticleStore& p, const BoxGeometry& box, double range) const;
+  void build_pairs(const ParticleStore& p, double range);
+
+  bool m_valid = false;
+  double m_range = 0.0;
+  std::size_t m_n_rebuilds = 0;
+  std::vector<Vec3> m_pos_at_rebuild;
+  std::vector<std::array<int, 2>> m_pairs;
+  std::unordered_set<std::uint64_t> m_exclusions;
+  // cell binning scratch
+  std::vector<int> m_cell_start, m_cell_particles;
+};
+
+}  // namespace pyoif

@@ -1,0 +1,209 @@
+// Force calculation of one step (architecture data flow steps 1-5).
+#include "interactions/bonded/bond_loop.hpp"
+#include "system/system.hpp"
+#include "utils/random.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace pyoif {
+
+void System::prepare_step() {
+  double max_cut = nonbonded.max_range();
+  if (cells.needs_rebuild(particles, time))
+    cells.rebuild(particles, box, max_cut);
+  else
+    cells.update_ghosts(particles, box);
+}
+
+void System::add_bonded_forces(Energies* e) {
+  auto& p = particles;
+  for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id) {
+    BondedEntry& entry = bonded[bond_id];
+    std::visit(
+        [&](auto& ia) {
+          prepare_bonds(ia, entry.bonds, p, box, comm);
+          double energy_sum = 0.0;
+          for_each_bond(ia, entry.bonds, p, box, time,
+                        [&](const auto& idx, const auto& f, double energy, const auto&) {
+                          for (std::size_t k = 0; k < idx.size(); ++k)
+                            p.force[idx[k]] += f[k];
+                          energy_sum += energy;
+                        });
+          if (e) {
+            e->bonded += energy_sum;
+            e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;
+          }
+        },
+        entry.interaction);
+  }
+}
+
+void System::add_nonbonded_forces(Energies* e) {
+  auto& p = particles;
+  const std::size_t n_local = p.n_local();
+  double energy = 0.0;
+  PairContext c;
+  for (const auto& pair : cells.pairs()) {
+    const int a = pair[0], b = pair[1];
+    const int owner_b = p.owner(b);
+    const PairParams* params = nonbonded.find(p.type[a], p.type[owner_b]);
+    if (!params)
+      continue;
+    c.d = p.pos[a] - p.position(b);
+    const double dist2 = c.d.squaredNorm();
+    if (dist2 >= params->range * params->range)
+      continue;
+    c.dist = std::sqrt(dist2);
+    c.mol_i = p.mol_id[a];
+    c.mol_j = p.mol_id[owner_b];
+    c.normal_i = p.normal[a];
+    c.normal_j = p.normal[owner_b];
+    const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
+    p.force[a] += f;
+    if (static_cast<std::size_t>(b) < n_local)
+      p.force[b] -= f;
+    else
+      p.ghost_force[b - n_local] -= f;
+  }
+  cells.collect_ghost_forces(p);
+  if (e)
+    e->non_bonded += energy;
+}
+
+void System::add_constraint_forces(Energies* e) {
+  auto& p = particles;
+  double energy = 0.0;
+  PairContext c;
+  c.wall = true;
+  c.mol_j = -1;
+  c.normal_j = Vec3::Zero();
+  for (auto& constraint : constraints) {
+    constraint->total_force.setZero();
+    for (std::size_t i = 0; i < p.n_local(); ++i) {
+      const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
+      if (!params)
+        continue;
+      double dist;
+      Vec3 normal;
+      constraint->shape->calc_dist(p.pos[i], dist, normal);
+      if (dist > 0.0) {
+        if (dist >= params->range)
+          continue;
+        c.d = dist * normal;
+        c.dist = dist;
+        c.mol_i = p.mol_id[i];
+        c.normal_i = p.normal[i];
+        const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
+        p.force[i] += f;
+        constraint->total_force -= f;
+      } else if (!constraint->penetrable) {
+        std::ostringstream msg;
+        msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
+            << ") penetrated the non-penetrable " << constraint->shape->name()
+            << " constraint (signed distance " << dist << ") at time " << time
+            << "; strengthen the node-wall interaction or reduce the time step";
+        throw SimulationInstability(msg.str());
+      }
+    }
+  }
+  if (e)
+    e->non_bonded += energy;
+}
+
+void System::add_langevin_forces() {
+  auto& p = particles;
+  const double gamma = langevin.gamma;
+  const double noise = std::sqrt(2.0 * gamma * langevin.kT / m_time_step);
+  const random::Key key{langevin.seed, static_cast<std::uint64_t>(random::Stream::langevin),
+                        step_count, 0};
+  for (std::size_t i = 0; i < p.n_local(); ++i) {
+    Vec3 f = -gamma * p.vel[i];
+    if (noise > 0.0) {
+      random::Key k = key;
+      k.key = static_cast<std::uint64_t>(p.id[i]);
+      for (int d = 0; d < 3; ++d)
+        f[d] += noise * random::normal(k, d);
+    }
+    p.force[i] += f;
+  }
+}
+
+template <bool with_energy> void System::force_loop(Energies* e) {
+  auto& p = particles;
+  for (std::size_t i = 0; i < p.n_local(); ++i)
+    p.force[i] = p.ext_force[i];
+  add_bonded_forces(e);
+  add_nonbonded_forces(e);
+  add_constraint_forces(e);
+  if constexpr (!with_energy) {
+    if (langevin.active && langevin.gamma > 0.0)
+      add_langevin_forces();
+    if (lb && lb_coupling.active)
+      lb::couple_particles(*lb, p, box, lb_coupling.params, step_count, m_time_step);
+  }
+}
+
+void System::compute_forces() {
+  prepare_step();
+  force_loop<false>(nullptr);
+  m_forces_valid = true;
+}
+
+Energies System::compute_energies() {
+  Energies e;
+  prepare_step();
+  const std::vector<Vec3> saved = particles.force;
+  force_loop<true>(&e);
+  particles.force = saved;
+  for (std::size_t i = 0; i < particles.n_local(); ++i)
+    e.kinetic += 0.5 * particles.mass[i] * particles.vel[i].squaredNorm();
+  e.kinetic = comm.allreduce_sum(e.kinetic);
+  e.bonded = comm.allreduce_sum(e.bonded);
+  e.non_bonded = comm.allreduce_sum(e.non_bonded);
+  return e;
+}
+
+void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
+  if (n_steps < 0)
+    throw InputError("steps must be a non-negative integer, got " + std::to_string(n_steps));
+  if (lb) {
+    set_time_step(m_time_step);  // re-checks tau against the time step
+    lb->validate(box, m_time_step);
+  }
+  auto& p = particles;
+  if (!reuse_forces && (!m_forces_valid || recalc_forces))
+    compute_forces();
+  const double dt = m_time_step;
+  const int lb_interval = lb_steps_per_update();
+  for (int step = 0; step < n_steps; ++step) {
+    // velocity Verlet, first half kick + drift
+    for (std::size_t i = 0; i < p.n_local(); ++i) {
+      const double half_dt_over_m = 0.5 * dt / p.mass[i];
+      for (int d = 0; d < 3; ++d) {
+        if (p.fixed[i] & (1u << d))
+          continue;
+        p.vel[i][d] += half_dt_over_m * p.force[i][d];
+        p.pos[i][d] += dt * p.vel[i][d];
+      }
+    }
+    ++step_count;
+    time += dt;
+    prepare_step();
+    force_loop<false>(nullptr);
+    // second half kick
+    for (std::size_t i = 0; i < p.n_local(); ++i) {
+      const double half_dt_over_m = 0.5 * dt / p.mass[i];
+      for (int d = 0; d < 3; ++d)
+        if (!(p.fixed[i] & (1u << d)))
+          p.vel[i][d] += half_dt_over_m * p.force[i][d];
+    }
+    if (lb && ++m_lb_substep >= lb_interval) {
+      m_lb_substep = 0;
+      lb->step();
+    }
+  }
+  m_forces_valid = true;
+}
+
+}  // namespace pyoif

@@ -1,0 +1,161 @@
+#include "system/system.hpp"
+
+#include "utils/errors.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace pyoif {
+
+System::System(const Vec3& box_l, const std::array<bool, 3>& periodic) : box(box_l, periodic) {}
+
+void System::set_time_step(double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw InputError("time_step must be a finite positive number, got " + std::to_string(dt));
+  if (lb) {
+    const double ratio = lb->tau() / dt;
+    if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || std::round(ratio) < 1)
+      throw InputError("time_step " + std::to_string(dt) +
+                       " does not divide the lattice-Boltzmann tau " + std::to_string(lb->tau()) +
+                       " (tau must be an integer multiple of time_step)");
+  }
+  m_time_step = dt;
+  m_forces_valid = false;
+}
+
+void System::set_box_l(const Vec3& l) {
+  box.set_length(l);
+  cells.invalidate();
+  m_forces_valid = false;
+}
+
+void System::set_periodicity(const std::array<bool, 3>& p) {
+  box.set_periodic(p);
+  cells.invalidate();
+  m_forces_valid = false;
+}
+
+int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass, int type,
+                         int mol_id, const Vec3& ext_force, std::uint8_t fixed) {
+  if (pid < 0)
+    pid = particles.max_id() + 1;
+  if (particles.index(pid) >= 0)
+    throw InputError("id: particle " + std::to_string(pid) + " already exists");
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw InputError("mass must be a finite positive number, got " + std::to_string(mass));
+  if (type < 0)
+    throw InputError("type must be a non-negative integer, got " + std::to_string(type));
+  if (!pos.allFinite() || !vel.allFinite() || !ext_force.allFinite())
+    throw InputError("pos, v and ext_force must be finite (particle " + std::to_string(pid) + ")");
+  particles.add(pid, pos, Vec3i::Zero(), vel, mass, type, mol_id, ext_force, fixed);
+  cells.invalidate();
+  m_forces_valid = false;
+  return pid;
+}
+
+void System::remove_particle(int pid) {
+  checked_index(pid);
+  particles.remove(pid);
+  for (auto& entry : bonded) {
+    auto& g = entry.bonds;
+    BondGroup kept;
+    kept.n_particles = g.n_particles;
+    kept.per_bond_stride = g.per_bond_stride;
+    for (std::size_t b = 0; b < g.size(); ++b) {
+      const int* ids = g.bond(b);
+      if (std::find(ids, ids + g.n_particles, pid) != ids + g.n_particles)
+        continue;
+      kept.ids.insert(kept.ids.end(), ids, ids + g.n_particles);
+      if (g.per_bond_stride)
+        kept.per_bond.insert(kept.per_bond.end(), g.reference(b),
+                             g.reference(b) + g.per_bond_stride);
+    }
+    g = std::move(kept);
+  }
+  cells.invalidate();
+  m_forces_valid = false;
+}
+
+void System::clear_particles() {
+  particles.clear();
+  for (auto& entry : bonded) {
+    entry.bonds.ids.clear();
+    entry.bonds.per_bond.clear();
+  }
+  cells.invalidate();
+  m_forces_valid = false;
+}
+
+int System::checked_index(int pid) const {
+  const int idx = particles.index(pid);
+  if (idx < 0)
+    throw InputError("particle id " + std::to_string(pid) + " does not exist");
+  return idx;
+}
+
+int System::add_bonded_interaction(const BondedInteraction& ia) {
+  BondedEntry entry{ia, {}};
+  std::visit(
+      [&](const auto& b) {
+        using IA = std::decay_t<decltype(b)>;
+        entry.bonds.n_particles = IA::n_particles;
+        entry.bonds.per_bond_stride = IA::per_bond_stride;
+      },
+      ia);
+  bonded.push_back(std::move(entry));
+  m_forces_valid = false;
+  return static_cast<int>(bonded.size()) - 1;
+}
+
+void System::add_bonds(int bond_id, const std::vector<int>& ids,
+                       const std::vector<double>& per_bond) {
+  if (bond_id < 0 || bond_id >= static_cast<int>(bonded.size()))
+    throw InputError("bond: bonded interaction " + std::to_string(bond_id) +
+                     " is not registered; add it with system.bonded_inter.add() first");
+  BondGroup& g = bonded[bond_id].bonds;
+  if (ids.size() % g.n_particles != 0)
+    throw InputError("bond partners: this bond joins " + std::to_string(g.n_particles) +
+                     " particles, got " + std::to_string(ids.size()) + " ids");
+  const std::size_t n = ids.size() / g.n_particles;
+  if (per_bond.size() != n * g.per_bond_stride)
+    throw InputError("bond reference values: expected " + std::to_string(g.per_bond_stride) +
+                     " per bond");
+  for (std::size_t b = 0; b < n; ++b)
+    for (int k = 0; k < g.n_particles; ++k) {
+      const int pid = ids[b * g.n_particles + k];
+      if (particles.index(pid) < 0)
+        throw InputError("bond partner: particle " + std::to_string(pid) + " does not exist");
+      for (int l = 0; l < k; ++l)
+        if (ids[b * g.n_particles + l] == pid)
+          throw InputError("bond partners: particle " + std::to_string(pid) +
+                           " appears twice in one bond");
+    }
+  g.ids.insert(g.ids.end(), ids.begin(), ids.end());
+  g.per_bond.insert(g.per_bond.end(), per_bond.begin(), per_bond.end());
+  m_forces_valid = false;
+}
+
+void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
+  if (fluid)
+    fluid->validate(box, m_time_step);
+  lb = std::move(fluid);
+  if (!lb)
+    lb_coupling.active = false;
+  m_lb_substep = 0;
+  m_forces_valid = false;
+}
+
+int System::lb_steps_per_update() const {
+  if (!lb)
+    return 0;
+  return static_cast<int>(std::lround(lb->tau() / m_time_step));
+}
+
+Vec3 System::particle_momentum() const {
+  Vec3 p = Vec3::Zero();
+  for (std::size_t i = 0; i < particles.n_local(); ++i)
+    p += particles.mass[i] * particles.vel[i];
+  return p;
+}
+
+}  // namespace pyoif

@@ -1,0 +1,1 @@
+"""oif: the object-in-fluid cell model (placeholder until the OIF issue)."""

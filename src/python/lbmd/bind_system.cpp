@@ -1,0 +1,269 @@
+// System, particles, cell system, thermostats, integrator and analysis.
+#include "bindings.hpp"
+
+#include "system/system.hpp"
+#include "utils/errors.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <string>
+
+namespace py = pybind11;
+
+namespace pyoif::python {
+
+namespace {
+
+using IdArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
+using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::vector<int> indices_of(const System& s, const IdArray& ids) {
+  std::vector<int> idx(ids.size());
+  auto r = ids.unchecked<1>();
+  for (py::ssize_t i = 0; i < r.shape(0); ++i)
+    idx[i] = s.checked_index(r(i));
+  return idx;
+}
+
+RealArray get_vectors(const System& s, const std::string& field, const IdArray& ids) {
+  const auto idx = indices_of(s, ids);
+  RealArray out({static_cast<py::ssize_t>(idx.size()), py::ssize_t{3}});
+  auto w = out.mutable_unchecked<2>();
+  const auto& p = s.particles;
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const int i = idx[n];
+    Vec3 v;
+    if (field == "pos")
+      v = s.box.unfolded(p.pos[i], p.image[i]);
+    else if (field == "pos_folded")
+      v = s.box.folded(p.pos[i]);
+    else if (field == "v")
+      v = p.vel[i];
+    else if (field == "f")
+      v = p.force[i];
+    else if (field == "ext_force")
+      v = p.ext_force[i];
+    else if (field == "image_box")
+      v = (p.image[i].cast<double>() +
+           (p.pos[i] - s.box.folded(p.pos[i])).cwiseQuotient(s.box.length()))
+              .array()
+              .round()
+              .matrix();
+    else if (field == "normal")
+      v = p.normal[i];
+    else
+      throw InputError("unknown vector property '" + field + "'");
+    for (int d = 0; d < 3; ++d)
+      w(n, d) = v[d];
+  }
+  return out;
+}
+
+void set_vectors(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  const auto idx = indices_of(s, ids);
+  if (values.ndim() != 2 || values.shape(0) != static_cast<py::ssize_t>(idx.size()) ||
+      values.shape(1) != 3)
+    throw InputError(field + ": expected an array of shape (" + std::to_string(idx.size()) +
+                     ", 3)");
+  auto r = values.unchecked<2>();
+  auto& p = s.particles;
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const Vec3 v(r(n, 0), r(n, 1), r(n, 2));
+    if (!v.allFinite())
+      throw InputError(field + ": values must be finite (particle " +
+                       std::to_string(p.id[idx[n]]) + ")");
+    const int i = idx[n];
+    if (field == "pos") {
+      p.pos[i] = v;
+      p.image[i].setZero();
+      s.cells.invalidate();
+    } else if (field == "v")
+      p.vel[i] = v;
+    else if (field == "ext_force")
+      p.ext_force[i] = v;
+    else if (field == "f")
+      p.force[i] = v;
+    else
+      throw InputError("property '" + field + "' cannot be set");
+  }
+}
+
+py::array get_scalars(const System& s, const std::string& field, const IdArray& ids) {
+  const auto idx = indices_of(s, ids);
+  const auto& p = s.particles;
+  if (field == "mass") {
+    RealArray out(static_cast<py::ssize_t>(idx.size()));
+    auto w = out.mutable_unchecked<1>();
+    for (std::size_t n = 0; n < idx.size(); ++n)
+      w(n) = p.mass[idx[n]];
+    return std::move(out);
+  }
+  py::array_t<int> out(static_cast<py::ssize_t>(idx.size()));
+  auto w = out.mutable_unchecked<1>();
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const int i = idx[n];
+    if (field == "type")
+      w(n) = p.type[i];
+    else if (field == "mol_id")
+      w(n) = p.mol_id[i];
+    else if (field == "fix")
+      w(n) = p.fixed[i];
+    else
+      throw InputError("unknown property '" + field + "'");
+  }
+  return std::move(out);
+}
+
+void set_scalars(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  const auto idx = indices_of(s, ids);
+  if (values.ndim() != 1 || values.shape(0) != static_cast<py::ssize_t>(idx.size()))
+    throw InputError(field + ": expected " + std::to_string(idx.size()) + " values");
+  auto r = values.unchecked<1>();
+  auto& p = s.particles;
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const int i = idx[n];
+    const double x = r(n);
+    if (field == "mass") {
+      if (!(x > 0.0) || !std::isfinite(x))
+        throw InputError("mass must be a finite positive number, got " + std::to_string(x));
+      p.mass[i] = x;
+    } else if (field == "type") {
+      if (x < 0)
+        throw InputError("type must be a non-negative integer");
+      p.type[i] = static_cast<int>(x);
+      s.cells.invalidate();
+    } else if (field == "mol_id")
+      p.mol_id[i] = static_cast<int>(x);
+    else if (field == "fix")
+      p.fixed[i] = static_cast<std::uint8_t>(x);
+    else
+      throw InputError("property '" + field + "' cannot be set");
+  }
+}
+
+IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const RealArray& vel,
+                      const RealArray& mass, const IdArray& type, const IdArray& mol_id,
+                      const RealArray& ext_force, const IdArray& fixed) {
+  const py::ssize_t n = pos.shape(0);
+  auto id_r = ids.unchecked<1>();
+  auto p_r = pos.unchecked<2>();
+  auto v_r = vel.unchecked<2>();
+  auto m_r = mass.unchecked<1>();
+  auto t_r = type.unchecked<1>();
+  auto mol_r = mol_id.unchecked<1>();
+  auto f_r = ext_force.unchecked<2>();
+  auto fix_r = fixed.unchecked<1>();
+  IdArray out(n);
+  auto w = out.mutable_unchecked<1>();
+  for (py::ssize_t i = 0; i < n; ++i)
+    w(i) = s.add_particle(id_r(i), Vec3(p_r(i, 0), p_r(i, 1), p_r(i, 2)),
+                          Vec3(v_r(i, 0), v_r(i, 1), v_r(i, 2)), m_r(i), t_r(i), mol_r(i),
+                          Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)), static_cast<std::uint8_t>(fix_r(i)));
+  return out;
+}
+
+IdArray all_ids(const System& s) {
+  std::vector<int> ids(s.particles.id);
+  std::sort(ids.begin(), ids.end());
+  IdArray out(static_cast<py::ssize_t>(ids.size()));
+  std::copy(ids.begin(), ids.end(), out.mutable_data());
+  return out;
+}
+
+/** Pairs of particle ids closer than `distance` (minimum image), from the
+ *  neighbour search: used by tests against brute force and by analysis. */
+std::vector<std::tuple<int, int>> get_pairs(System& s, double distance) {
+  if (distance > s.nonbonded.max_range() + s.cells.skin)
+    throw InputError("get_pairs: distance must not exceed the interaction range "
+                     "(largest cutoff + skin)");
+  s.compute_forces();
+  std::vector<std::tuple<int, int>> out;
+  const auto& p = s.particles;
+  for (const auto& pr : s.cells.pairs()) {
+    if ((p.position(pr[0]) - p.position(pr[1])).norm() >= distance)
+      continue;
+    int a = p.id[p.owner(pr[0])], b = p.id[p.owner(pr[1])];
+    out.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_system(py::module_& m) {
+  py::class_<LangevinParams>(m, "LangevinParams")
+      .def_readonly("active", &LangevinParams::active)
+      .def_readonly("kT", &LangevinParams::kT)
+      .def_readonly("gamma", &LangevinParams::gamma)
+      .def_readonly("seed", &LangevinParams::seed);
+
+  py::class_<System, std::shared_ptr<System>>(m, "System")
+      .def(py::init<const Vec3&, const std::array<bool, 3>&>(), py::arg("box_l"),
+           py::arg("periodicity"))
+      .def_property(
+          "box_l", [](const System& s) { return s.box.length(); },
+          [](System& s, const Vec3& l) { s.set_box_l(l); })
+      .def_property(
+          "periodicity", [](const System& s) { return s.box.periodic(); },
+          [](System& s, const std::array<bool, 3>& p) { s.set_periodicity(p); })
+      .def_property("time_step", &System::time_step, &System::set_time_step)
+      .def_readwrite("time", &System::time)
+      .def_readonly("step_count", &System::step_count)
+      .def_property(
+          "skin", [](const System& s) { return s.cells.skin; },
+          [](System& s, double skin) {
+            if (!(skin >= 0.0) || !std::isfinite(skin))
+              throw InputError("skin must be a finite non-negative number");
+            s.cells.skin = skin;
+            s.cells.invalidate();
+          })
+      .def_property_readonly("n_rebuilds", [](const System& s) { return s.cells.n_rebuilds(); })
+      .def_property_readonly("max_range", [](const System& s) { return s.nonbonded.max_range(); })
+      .def_property_readonly("rank", [](const System& s) { return s.comm.rank(); })
+      .def_property_readonly("n_ranks", [](const System& s) { return s.comm.size(); })
+      // particles
+      .def("add_particles", &add_particles)
+      .def("remove_particle", &System::remove_particle)
+      .def("clear_particles", &System::clear_particles)
+      .def("n_particles", [](const System& s) { return s.particles.n_local(); })
+      .def("exists", [](const System& s, int pid) { return s.particles.index(pid) >= 0; })
+      .def("all_ids", &all_ids)
+      .def("max_id", [](const System& s) { return s.particles.max_id(); })
+      .def("get_vectors", &get_vectors)
+      .def("set_vectors", &set_vectors)
+      .def("get_scalars", &get_scalars)
+      .def("set_scalars", &set_scalars)
+      .def("add_exclusion", [](System& s, int a, int b) { s.cells.add_exclusion(a, b); })
+      .def("remove_exclusion", [](System& s, int a, int b) { s.cells.remove_exclusion(a, b); })
+      .def("get_pairs", &get_pairs)
+      // thermostats
+      .def("set_langevin",
+           [](System& s, double kT, double gamma, std::uint64_t seed) {
+             s.langevin = {true, kT, gamma, seed};
+           })
+      .def("langevin_off", [](System& s) { s.langevin.active = false; })
+      .def_property_readonly("langevin", [](const System& s) { return s.langevin; })
+      // integration
+      .def("integrate", &System::integrate, py::arg("steps"), py::arg("recalc_forces") = false,
+           py::arg("reuse_forces") = false, py::call_guard<py::gil_scoped_release>())
+      .def("compute_forces", &System::compute_forces)
+      .def("energies",
+           [](System& s) {
+             const Energies e = s.compute_energies();
+             py::dict d;
+             d["total"] = e.total();
+             d["kinetic"] = e.kinetic;
+             d["bonded"] = e.bonded;
+             d["non_bonded"] = e.non_bonded;
+             for (const auto& [id, value] : e.bonded_by_id)
+               d[py::make_tuple("bonded", id)] = value;
+             return d;
+           })
+      .def("particle_momentum", &System::particle_momentum)
+      .def("fluid_momentum",
+           [](const System& s) -> Vec3 { return s.lb ? s.lb->total_momentum() : Vec3::Zero(); });
+}
+
+}  // namespace pyoif::python

@@ -1,0 +1,5 @@
+"""PLACEHOLDER: filled by the lattice-Boltzmann work."""
+
+
+class LBFluid:
+    pass

@@ -1,0 +1,301 @@
+"""Particles: ``system.part`` (add, by_id, by_ids, all, clear), handles to one
+particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API)."""
+import numbers
+
+import numpy as np
+
+_VECTOR_PROPS = ("pos", "v", "f", "ext_force")
+_READONLY_VECTOR_PROPS = ("pos_folded", "image_box", "normal")
+_SCALAR_PROPS = ("mass", "type", "mol_id")
+_ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
+
+
+def _ids_array(ids):
+    return np.ascontiguousarray(np.atleast_1d(np.asarray(ids, dtype=np.int32)))
+
+
+def _fix_to_mask(fix, n):
+    fix = np.asarray(fix, dtype=bool)
+    if fix.shape == (3,):
+        fix = np.broadcast_to(fix, (n, 3))
+    if fix.shape != (n, 3):
+        raise ValueError(f"ParticleList.add: parameter 'fix' must be 3 booleans per particle, "
+                         f"got shape {fix.shape}")
+    return (fix[:, 0] * 1 + fix[:, 1] * 2 + fix[:, 2] * 4).astype(np.int32)
+
+
+class _ParticleView:
+    """Shared property access for handles (one id) and slices (many ids)."""
+
+    _single = False
+
+    def __init__(self, system, ids):
+        object.__setattr__(self, "_system", system)
+        object.__setattr__(self, "_ids", _ids_array(ids))
+
+    @property
+    def _core(self):
+        return self._system._core
+
+    def _out(self, arr):
+        return arr[0] if self._single else arr
+
+    def _vec_in(self, name, value):
+        arr = np.asarray(value, dtype=float)
+        if arr.shape == (3,):
+            arr = np.broadcast_to(arr, (len(self._ids), 3))
+        if arr.shape != (len(self._ids), 3):
+            raise ValueError(f"particle property '{name}' must be 3 numbers per particle, "
+                             f"got shape {np.shape(value)} for {len(self._ids)} particle(s)")
+        return np.ascontiguousarray(arr)
+
+    def __getattr__(self, name):
+        if name in _VECTOR_PROPS or name in _READONLY_VECTOR_PROPS:
+            return self._out(self._core.get_vectors(name, self._ids))
+        if name in _SCALAR_PROPS:
+            return self._out(self._core.get_scalars(name, self._ids))
+        if name == "fix":
+            mask = self._core.get_scalars("fix", self._ids)
+            arr = np.stack([(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0], axis=1)
+            return self._out(arr)
+        if name == "id":
+            return self._out(self._ids.copy())
+        raise AttributeError(f"{type(self).__name__} has no property '{name}'")
+
+    def __setattr__(self, name, value):
+        if name in _VECTOR_PROPS:
+            self._core.set_vectors(name, self._ids, self._vec_in(name, value))
+        elif name in _SCALAR_PROPS:
+            arr = np.asarray(value, dtype=float)
+            if arr.ndim == 0:
+                arr = np.full(len(self._ids), float(arr))
+            self._core.set_scalars(name, self._ids, np.ascontiguousarray(arr))
+        elif name == "fix":
+            mask = _fix_to_mask(value, len(self._ids))
+            self._core.set_scalars("fix", self._ids, mask.astype(float))
+        elif name in _READONLY_VECTOR_PROPS or name == "id":
+            raise AttributeError(f"particle property '{name}' is read-only")
+        else:
+            raise AttributeError(f"particles have no property '{name}' "
+                                 f"(settable: {', '.join(_VECTOR_PROPS + _SCALAR_PROPS + ('fix',))})")
+
+    def remove(self):
+        for pid in self._ids:
+            self._core.remove_particle(int(pid))
+
+
+class ParticleHandle(_ParticleView):
+    """One particle, by id."""
+
+    _single = True
+
+    def __init__(self, system, pid):
+        super().__init__(system, [pid])
+        if not system._core.exists(int(pid)):
+            raise IndexError(f"particle id {pid} does not exist")
+
+    @property
+    def id(self):
+        return int(self._ids[0])
+
+    def add_bond(self, bond):
+        """bond = (bonded_interaction, partner, ...): partners as ids or handles."""
+        if not isinstance(bond, tuple) or len(bond) < 2:
+            raise TypeError("add_bond: expected a tuple (bond, partner_id, ...)")
+        ia, partners = bond[0], bond[1:]
+        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else p for p in partners]
+        for p in ids:
+            if isinstance(p, bool) or not isinstance(p, numbers.Integral):
+                raise TypeError(f"add_bond: partners must be particle ids or handles, got {p!r}")
+        self._system.bonded_inter._add_bonds(ia, np.asarray([ids], dtype=np.int32))
+
+    def delete_bond(self, bond):
+        ia, partners = bond[0], bond[1:]
+        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else int(p) for p in partners]
+        if not self._core.remove_bond(self._system.bonded_inter._id_of(ia), ids):
+            raise ValueError(f"delete_bond: particle {self.id} has no such bond")
+
+    @property
+    def bonds(self):
+        """Bonds owned by this particle: tuples (bond, partner ids...)."""
+        out = []
+        for bond_id, ia in enumerate(self._system.bonded_inter):
+            for row in self._core.get_bonds(bond_id):
+                if row[0] == self.id:
+                    out.append((ia,) + tuple(int(x) for x in row[1:]))
+        return tuple(out)
+
+    def add_exclusion(self, pid):
+        self._core.add_exclusion(self.id, int(pid))
+
+    def delete_exclusion(self, pid):
+        self._core.remove_exclusion(self.id, int(pid))
+
+    def to_dict(self):
+        return {k: getattr(self, k) for k in ("id", "pos", "v", "f", "mass", "type", "mol_id",
+                                              "ext_force", "fix")}
+
+    def __repr__(self):
+        return f"ParticleHandle(id={self.id}, pos={self.pos.tolist()}, type={self.type})"
+
+    def __eq__(self, other):
+        return isinstance(other, ParticleHandle) and other.id == self.id and other._system is self._system
+
+    def __hash__(self):
+        return hash(self.id)
+
+
+class ParticleSlice(_ParticleView):
+    """Several particles, by ids; properties are numpy arrays (N×3 or N)."""
+
+    def __len__(self):
+        return len(self._ids)
+
+    def __iter__(self):
+        for pid in self._ids:
+            yield ParticleHandle(self._system, int(pid))
+
+    def __getitem__(self, i):
+        sel = self._ids[i]
+        if np.ndim(sel) == 0:
+            return ParticleHandle(self._system, int(sel))
+        return ParticleSlice(self._system, sel)
+
+    def __repr__(self):
+        return f"ParticleSlice({len(self)} particles)"
+
+
+class ParticleList:
+    """``system.part``: create, find and remove particles."""
+
+    def __init__(self, system):
+        self._system = system
+
+    @property
+    def _core(self):
+        return self._system._core
+
+    def add(self, *args, **kwargs):
+        """Add one particle (pos of 3 numbers) -> ParticleHandle, or many
+        (pos of shape N×3, other properties per particle or shared) -> ParticleSlice.
+
+        Keywords: id, pos (required), v, mass, type, mol_id, ext_force, fix."""
+        if args:
+            if len(args) == 1 and isinstance(args[0], dict) and not kwargs:
+                kwargs = dict(args[0])
+            else:
+                raise TypeError("ParticleList.add: use keyword arguments, e.g. add(pos=[1, 2, 3])")
+        unknown = [k for k in kwargs if k not in _ADD_KEYS]
+        if unknown:
+            raise TypeError(f"ParticleList.add: unknown parameter(s) {', '.join(map(repr, unknown))}; "
+                            f"accepted: {', '.join(_ADD_KEYS)}")
+        if "pos" not in kwargs:
+            raise TypeError("ParticleList.add: missing required parameter 'pos'")
+        try:
+            pos = np.asarray(kwargs["pos"], dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"ParticleList.add: parameter 'pos' must be numbers, got {kwargs['pos']!r}") from None
+        single = pos.ndim == 1
+        pos = np.atleast_2d(pos)
+        if pos.ndim != 2 or pos.shape[1] != 3:
+            raise ValueError(f"ParticleList.add: parameter 'pos' must have 3 components per particle, "
+                             f"got shape {np.shape(kwargs['pos'])}")
+        n = pos.shape[0]
+
+        def per_particle_vec(name, default):
+            value = kwargs.get(name, default)
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise TypeError(f"ParticleList.add: parameter '{name}' must be numbers, got {value!r}") from None
+            if arr.shape == (3,):
+                arr = np.broadcast_to(arr, (n, 3))
+            if arr.shape != (n, 3):
+                raise ValueError(f"ParticleList.add: parameter '{name}' must be 3 numbers"
+                                 f"{' per particle' if not single else ''}, got shape {arr.shape}")
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"ParticleList.add: parameter '{name}' must be finite")
+            return np.ascontiguousarray(arr)
+
+        def per_particle_scalar(name, default, integer):
+            value = kwargs.get(name, default)
+            arr = np.asarray(value)
+            if arr.dtype == bool or (integer and arr.size and not np.issubdtype(arr.dtype, np.integer)):
+                raise TypeError(f"ParticleList.add: parameter '{name}' must be an integer, got {value!r}")
+            if not integer and not np.issubdtype(arr.dtype, np.number):
+                raise TypeError(f"ParticleList.add: parameter '{name}' must be a number, got {value!r}")
+            if arr.ndim == 0:
+                arr = np.full(n, arr)
+            if arr.shape != (n,):
+                raise ValueError(f"ParticleList.add: parameter '{name}' must have one value per "
+                                 f"particle, got shape {arr.shape}")
+            return np.ascontiguousarray(arr, dtype=np.int32 if integer else float)
+
+        v = per_particle_vec("v", [0.0, 0.0, 0.0])
+        ext_force = per_particle_vec("ext_force", [0.0, 0.0, 0.0])
+        mass = per_particle_scalar("mass", 1.0, False)
+        if not np.all(mass > 0):
+            raise ValueError(f"ParticleList.add: parameter 'mass' must be > 0, got {kwargs['mass']!r}")
+        ptype = per_particle_scalar("type", 0, True)
+        if np.any(ptype < 0):
+            raise ValueError(f"ParticleList.add: parameter 'type' must be >= 0, got {kwargs['type']!r}")
+        mol_id = per_particle_scalar("mol_id", 0, True)
+        if "id" in kwargs:
+            ids = per_particle_scalar("id", 0, True)
+            if np.any(ids < 0):
+                raise ValueError("ParticleList.add: parameter 'id' must be >= 0")
+            if len(np.unique(ids)) != n:
+                raise ValueError("ParticleList.add: parameter 'id' has duplicate ids")
+        else:
+            first = self._core.max_id() + 1
+            ids = np.arange(first, first + n, dtype=np.int32)
+        fix = _fix_to_mask(kwargs.get("fix", [False, False, False]), n)
+        for pid in ids:
+            if self._core.exists(int(pid)):
+                raise ValueError(f"ParticleList.add: parameter 'id': particle {pid} already exists")
+        new_ids = self._core.add_particles(ids, np.ascontiguousarray(pos), v, mass, ptype, mol_id,
+                                           ext_force, fix)
+        if single:
+            return ParticleHandle(self._system, int(new_ids[0]))
+        return ParticleSlice(self._system, new_ids)
+
+    def by_id(self, pid):
+        return ParticleHandle(self._system, pid)
+
+    def by_ids(self, ids):
+        ids = _ids_array(ids)
+        for pid in ids:
+            if not self._core.exists(int(pid)):
+                raise IndexError(f"particle id {pid} does not exist")
+        return ParticleSlice(self._system, ids)
+
+    def all(self):
+        return ParticleSlice(self._system, self._core.all_ids())
+
+    def select(self, **conditions):
+        """Particles whose properties equal the given values, e.g. select(type=1)."""
+        sl = self.all()
+        mask = np.ones(len(sl), dtype=bool)
+        for k, val in conditions.items():
+            mask &= np.asarray(getattr(sl, k)) == val
+        return ParticleSlice(self._system, sl._ids[mask])
+
+    def exists(self, pid):
+        return bool(self._core.exists(int(pid)))
+
+    def clear(self):
+        self._core.clear_particles()
+
+    @property
+    def highest_particle_id(self):
+        return int(self._core.max_id())
+
+    def __len__(self):
+        return int(self._core.n_particles())
+
+    def add_bonds(self, bond, ids):
+        """Bulk bonds: ids is an M×k array, one row per bond (owner first)."""
+        self._system.bonded_inter._add_bonds(bond, ids)
+
+    def __repr__(self):
+        return f"ParticleList({len(self)} particles)"

@@ -1,0 +1,278 @@
+"""lbmd.System and its parts: cell_system, integrator, thermostat, actors,
+analysis (ESPResSo 4.2 names)."""
+import numbers
+
+import numpy as np
+
+from . import _lbmd
+from .constraints import Constraints
+from .interactions import BondedInteractions, NonBondedInteractions
+from .particle_data import ParticleList
+from .validation import Param, parse, positive, non_negative
+
+
+class CellSystem:
+    """``system.cell_system``: neighbour search (linked cells + Verlet lists)."""
+
+    def __init__(self, system):
+        self._system = system
+
+    @property
+    def skin(self):
+        return self._system._core.skin
+
+    @skin.setter
+    def skin(self, value):
+        parse("cell_system", [Param("skin", "float", check=non_negative)], {"skin": value})
+        self._system._core.skin = float(value)
+
+    def set_regular_decomposition(self, use_verlet_lists=True, fully_connected_boundary=None):
+        """Accepted for ESPResSo compatibility: this engine always uses linked
+        cells with Verlet lists."""
+
+    set_domain_decomposition = set_regular_decomposition
+
+    def set_n_square(self, use_verlet_lists=True):
+        """Accepted for ESPResSo compatibility (linked cells are used)."""
+
+    def get_pairs(self, distance):
+        """Sorted list of (id1, id2) with id1 < id2 of particles closer than
+        distance (minimum image); distance may not exceed largest cutoff + skin."""
+        d = parse("cell_system.get_pairs", [Param("distance", "float", check=positive)],
+                  {"distance": distance})["distance"]
+        return sorted(set(self._system._core.get_pairs(d)))
+
+    @property
+    def n_rebuilds(self):
+        """Number of Verlet-list rebuilds so far."""
+        return self._system._core.n_rebuilds
+
+
+class Integrator:
+    """``system.integrator``: velocity Verlet."""
+
+    def __init__(self, system):
+        self._system = system
+
+    def run(self, steps=1, recalc_forces=False, reuse_forces=False):
+        """Integrate `steps` time steps (all in C++)."""
+        v = parse("integrator.run", [Param("steps", "int", check=non_negative),
+                                     Param("recalc_forces", "bool"), Param("reuse_forces", "bool")],
+                  {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces})
+        self._system._check_ready()
+        self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"])
+
+    def set_vv(self):
+        """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
+
+
+class Thermostat:
+    """``system.thermostat``: Langevin (relaxation runs, tests) and the
+    lattice-Boltzmann coupling (model eq. 1)."""
+
+    def __init__(self, system):
+        self._system = system
+        self._lb = None
+
+    def set_langevin(self, kT=None, gamma=None, seed=None):
+        v = parse("thermostat.set_langevin",
+                  [Param("kT", "float", check=non_negative), Param("gamma", "float", check=non_negative),
+                   Param("seed", "int", None, check=non_negative)],
+                  {k: x for k, x in (("kT", kT), ("gamma", gamma), ("seed", seed)) if x is not None})
+        if v["kT"] > 0 and v["seed"] is None:
+            raise ValueError("thermostat.set_langevin: parameter 'seed' is required when kT > 0")
+        self._system._core.set_langevin(v["kT"], v["gamma"], v["seed"] or 0)
+
+    def set_lb(self, LB_fluid=None, gamma=None, seed=None, act_on_virtual=True):
+        """Couple all particles to the fluid LB_fluid with friction gamma."""
+        from .lb import LBFluid
+        if not isinstance(LB_fluid, LBFluid):
+            raise TypeError("thermostat.set_lb: parameter 'LB_fluid' must be an lbmd.lb.LBFluid, "
+                            f"got {type(LB_fluid).__name__}")
+        v = parse("thermostat.set_lb", [Param("gamma", "float", check=non_negative),
+                                        Param("seed", "int", 0, check=non_negative)],
+                  {k: x for k, x in (("gamma", gamma), ("seed", seed)) if x is not None})
+        if LB_fluid.kT > 0 and seed is None:
+            raise ValueError("thermostat.set_lb: parameter 'seed' is required when the fluid has kT > 0")
+        if LB_fluid not in self._system.actors:
+            raise ValueError("thermostat.set_lb: add the fluid first with system.actors.add(lbf)")
+        self._system._core.set_lb_coupling(v["gamma"], v["seed"])
+        self._lb = (LB_fluid, v["gamma"], v["seed"])
+
+    def turn_off(self):
+        self._system._core.langevin_off()
+        if self._lb is not None:
+            self._system._core.set_lb_coupling_off()
+            self._lb = None
+
+    def get_state(self):
+        out = []
+        lang = self._system._core.langevin
+        if lang.active:
+            out.append({"type": "LANGEVIN", "kT": lang.kT, "gamma": lang.gamma, "seed": lang.seed})
+        if self._lb is not None:
+            out.append({"type": "LB", "gamma": self._lb[1], "seed": self._lb[2]})
+        return out
+
+
+class Actors:
+    """``system.actors``: the lattice-Boltzmann fluid (one at a time)."""
+
+    def __init__(self, system):
+        self._system = system
+        self._list = []
+
+    def add(self, actor):
+        if not hasattr(actor, "_activate"):
+            raise TypeError(f"actors.add: {type(actor).__name__} is not an actor")
+        if actor in self._list:
+            raise ValueError("actors.add: this actor is already active")
+        actor._activate(self._system)
+        self._list.append(actor)
+        return actor
+
+    def remove(self, actor):
+        if actor not in self._list:
+            raise ValueError("actors.remove: this actor is not active")
+        actor._deactivate(self._system)
+        self._list.remove(actor)
+        if self._system.thermostat._lb is not None and self._system.thermostat._lb[0] is actor:
+            self._system.thermostat._lb = None
+
+    def clear(self):
+        for a in list(self._list):
+            self.remove(a)
+
+    def __contains__(self, actor):
+        return any(a is actor for a in self._list)
+
+    def __iter__(self):
+        return iter(self._list)
+
+    def __len__(self):
+        return len(self._list)
+
+    def __getitem__(self, i):
+        return self._list[i]
+
+
+class Analysis:
+    """``system.analysis``: energies, momentum, distances."""
+
+    def __init__(self, system):
+        self._system = system
+
+    def energy(self):
+        """dict with 'total', 'kinetic', 'bonded', 'non_bonded' and
+        ('bonded', id) per bonded interaction."""
+        return self._system._core.energies()
+
+    def linear_momentum(self, include_particles=True, include_lbfluid=True):
+        p = np.zeros(3)
+        if include_particles:
+            p += self._system._core.particle_momentum()
+        if include_lbfluid:
+            p += self._system._core.fluid_momentum()
+        return p
+
+    def min_dist(self, p1="default", p2="default"):
+        """Smallest minimum-image distance between particles (of types p1, p2)."""
+        part = self._system.part.all()
+        pos, types = part.pos, part.type
+        sel1 = np.ones(len(pos), bool) if p1 == "default" else np.isin(types, p1)
+        sel2 = np.ones(len(pos), bool) if p2 == "default" else np.isin(types, p2)
+        best = np.inf
+        box = np.asarray(self._system.box_l)
+        per = np.asarray(self._system.periodicity)
+        for i in np.nonzero(sel1)[0]:
+            d = pos[sel2] - pos[i]
+            d[:, per] -= box[per] * np.round(d[:, per] / box[per])
+            r = np.linalg.norm(d, axis=1)
+            r = r[np.nonzero(sel2)[0] != i]
+            if r.size:
+                best = min(best, r.min())
+        return float(best)
+
+    def center_of_mass(self, p_type):
+        sel = self._system.part.select(type=p_type)
+        m = sel.mass
+        return (sel.pos * m[:, None]).sum(axis=0) / m.sum()
+
+
+class System:
+    """A simulation: box, particles, interactions, fluid, integrator.
+
+    ``System(box_l=[Lx, Ly, Lz], periodicity=[True, True, True], time_step=None)``
+    """
+
+    _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects"}
+
+    def __init__(self, **kwargs):
+        v = parse("System", [Param("box_l", "vec3"), Param("periodicity", "bool3", [True, True, True]),
+                             Param("time_step", "float", None, check=positive),
+                             Param("min_global_cut", "float", 0.0, check=non_negative)], kwargs)
+        if not np.all(v["box_l"] > 0):
+            raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {kwargs['box_l']!r}")
+        d = self.__dict__
+        d["_core"] = _lbmd.System(v["box_l"], v["periodicity"])
+        d["_time_step_set"] = False
+        d["part"] = ParticleList(self)
+        d["non_bonded_inter"] = NonBondedInteractions(self)
+        d["bonded_inter"] = BondedInteractions(self)
+        d["constraints"] = Constraints(self)
+        d["cell_system"] = CellSystem(self)
+        d["integrator"] = Integrator(self)
+        d["thermostat"] = Thermostat(self)
+        d["actors"] = Actors(self)
+        d["analysis"] = Analysis(self)
+        from .lbboundaries import LBBoundaries
+        d["lbboundaries"] = LBBoundaries(self)
+        d["min_global_cut"] = v["min_global_cut"]
+        d["max_oif_objects"] = 0
+        if v["time_step"] is not None:
+            self.time_step = v["time_step"]
+
+    def _check_ready(self):
+        if not self._time_step_set:
+            raise RuntimeError("System: set system.time_step before integrating")
+
+    def __setattr__(self, name, value):
+        if name in ("box_l",):
+            v = parse("System", [Param("box_l", "vec3")], {"box_l": value})["box_l"]
+            if not np.all(v > 0):
+                raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {value!r}")
+            self._core.box_l = v
+        elif name == "periodicity":
+            self._core.periodicity = parse("System", [Param("periodicity", "bool3")],
+                                           {"periodicity": value})["periodicity"]
+        elif name == "time_step":
+            dt = parse("System", [Param("time_step", "float", check=positive)],
+                       {"time_step": value})["time_step"]
+            self._core.time_step = dt
+            self.__dict__["_time_step_set"] = True
+        elif name == "time":
+            self._core.time = parse("System", [Param("time", "float")], {"time": value})["time"]
+        elif name in ("min_global_cut", "max_oif_objects"):
+            self.__dict__[name] = value
+        else:
+            raise AttributeError(f"System has no settable attribute '{name}'")
+
+    @property
+    def box_l(self):
+        return np.array(self._core.box_l)
+
+    @property
+    def periodicity(self):
+        return list(self._core.periodicity)
+
+    @property
+    def time_step(self):
+        return self._core.time_step
+
+    @property
+    def time(self):
+        return self._core.time
+
+    def __repr__(self):
+        return (f"System(box_l={self.box_l.tolist()}, periodicity={self.periodicity}, "
+                f"time_step={self.time_step}, particles={len(self.part)})")

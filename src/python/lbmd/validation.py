@@ -1,0 +1,147 @@
+"""Parameter declaration and validation, in one place for the whole package.
+
+A class declares its parameters as a list of :class:`Param`; :func:`parse`
+checks a call's keyword arguments against it: unknown or missing keywords are
+``TypeError``, values of the wrong kind or out of range are ``ValueError``,
+each message naming the class, the parameter and what was expected.
+"""
+import math
+import numbers
+
+import numpy as np
+
+REQUIRED = object()
+
+
+class Param:
+    """One parameter: name, kind, default, and an optional range check.
+
+    kind is one of 'float', 'int', 'bool', 'vec3' (3 floats), 'bool3'
+    (3 bools), 'int_array', 'object' (any value, or an instance of `cls`).
+    `check` is a (predicate, description) pair, e.g. ``positive``.
+    """
+
+    def __init__(self, name, kind, default=REQUIRED, check=None, cls=None, doc=""):
+        self.name = name
+        self.kind = kind
+        self.default = default
+        self.check = check
+        self.cls = cls
+        self.doc = doc
+
+    def convert(self, owner, value):
+        where = f"{owner}: parameter '{self.name}'"
+        k = self.kind
+        if k == "float":
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise TypeError(f"{where} must be a number, got {value!r}")
+            value = float(value)
+            if not math.isfinite(value):
+                raise ValueError(f"{where} must be finite, got {value!r}")
+        elif k == "int":
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+                raise TypeError(f"{where} must be an integer, got {value!r}")
+            value = int(value)
+        elif k == "bool":
+            if not isinstance(value, (bool, np.bool_)):
+                raise TypeError(f"{where} must be True or False, got {value!r}")
+            value = bool(value)
+        elif k == "vec3":
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise TypeError(f"{where} must be 3 numbers, got {value!r}") from None
+            if arr.shape != (3,):
+                raise ValueError(f"{where} must be 3 numbers, got {value!r}")
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{where} must be finite, got {value!r}")
+            value = arr
+        elif k == "bool3":
+            arr = np.asarray(value)
+            if arr.shape != (3,) or arr.dtype != bool:
+                raise ValueError(f"{where} must be 3 booleans, got {value!r}")
+            value = [bool(x) for x in arr]
+        elif k == "object":
+            if self.cls is not None and not isinstance(value, self.cls):
+                names = (self.cls.__name__ if isinstance(self.cls, type)
+                         else " or ".join(c.__name__ for c in self.cls))
+                raise TypeError(f"{where} must be a {names}, got {type(value).__name__}")
+        else:  # pragma: no cover - declaration error
+            raise AssertionError(f"unknown parameter kind {k}")
+        if self.check is not None:
+            predicate, description = self.check
+            if not predicate(value):
+                raise ValueError(f"{where} must be {description}, got {value!r}")
+        return value
+
+
+def parse(owner, params, kwargs):
+    """Validate kwargs against the declared params; returns a dict of all of them."""
+    known = {p.name: p for p in params}
+    unknown = [k for k in kwargs if k not in known]
+    if unknown:
+        raise TypeError(f"{owner}: unknown parameter(s) {', '.join(map(repr, unknown))}; "
+                        f"accepted: {', '.join(known)}")
+    out = {}
+    for p in params:
+        if p.name in kwargs:
+            out[p.name] = p.convert(owner, kwargs[p.name])
+        elif p.default is REQUIRED:
+            raise TypeError(f"{owner}: missing required parameter '{p.name}'")
+        else:
+            out[p.name] = p.default
+    return out
+
+
+# Range checks: (predicate, description)
+positive = (lambda x: x > 0, "> 0")
+non_negative = (lambda x: x >= 0, ">= 0")
+greater_than_one = (lambda x: x > 1, "> 1")
+
+
+def in_open_range(lo, hi):
+    return (lambda x: lo < x < hi, f"in the open range ({lo}, {hi})")
+
+
+def all_positive():
+    return (lambda v: bool(np.all(np.asarray(v) > 0)), "positive in every component")
+
+
+def unit_or_nonzero():
+    return (lambda v: float(np.linalg.norm(v)) > 0, "a non-zero vector")
+
+
+class ParameterObject:
+    """Base of objects whose constructor takes only declared keyword parameters.
+
+    Subclasses set ``_params`` (a list of Param). Parameters read back exactly
+    as set through attributes and ``get_params()``.
+    """
+
+    _params = []
+
+    def __init__(self, **kwargs):
+        object.__setattr__(self, "_values", parse(type(self).__name__, self._params, kwargs))
+        self._validate()
+
+    def _validate(self):
+        """Checks across parameters; subclasses override."""
+
+    def get_params(self):
+        return {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in self._values.items()}
+
+    def __getattr__(self, name):
+        values = self.__dict__.get("_values", {})
+        if name in values:
+            return values[name]
+        raise AttributeError(f"{type(self).__name__} has no attribute '{name}'")
+
+    def __repr__(self):
+        args = ", ".join(f"{k}={_fmt(v)}" for k, v in self._values.items())
+        return f"{type(self).__name__}({args})"
+
+
+def _fmt(v):
+    if isinstance(v, np.ndarray):
+        return repr(v.tolist())
+    return repr(v)
