@@ -112,6 +112,10 @@ class BondedInteraction(ParameterObject):
     def _core_object(self):
         return self._core_class(**self._values)
 
+    def _default_per_bond(self, n_bonds):
+        """Per-bond reference values used when add_bonds gets none."""
+        return np.zeros((n_bonds, self.per_bond_stride))
+
     def __eq__(self, other):
         return self is other
 
@@ -160,7 +164,7 @@ class BondedInteractions:
             raise ValueError(f"{type(bond).__name__} joins {k} particles: expected an M×{k} "
                              f"array of ids, got shape {ids.shape}")
         if per_bond is None:
-            per_bond = np.zeros((ids.shape[0], bond.per_bond_stride))
+            per_bond = bond._default_per_bond(ids.shape[0])
         per_bond = np.ascontiguousarray(np.asarray(per_bond, dtype=float))
         self._system._core.add_bonds(bond_id, ids.ravel(), per_bond.ravel())
 

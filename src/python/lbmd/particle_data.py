@@ -293,9 +293,11 @@ class ParticleList:
     def __len__(self):
         return int(self._core.n_particles())
 
-    def add_bonds(self, bond, ids):
-        """Bulk bonds: ids is an M×k array, one row per bond (owner first)."""
-        self._system.bonded_inter._add_bonds(bond, ids)
+    def add_bonds(self, bond, ids, per_bond=None):
+        """Bulk bonds: ids is an M×k array of particle ids, one row per bond
+        (owner first); per_bond an M×s array of per-bond reference values for
+        bonds that have them (default: the bond's own, see BondedInteraction)."""
+        self._system.bonded_inter._add_bonds(bond, ids, per_bond)
 
     def __repr__(self):
         return f"ParticleList({len(self)} particles)"

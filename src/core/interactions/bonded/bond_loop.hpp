@@ -30,14 +30,15 @@ namespace detail {
 template <class IA, class = void> struct has_prepare : std::false_type {};
 template <class IA>
 struct has_prepare<IA, std::void_t<decltype(std::declval<IA&>().prepare(
-                           std::declval<const BondGroup&>(), std::declval<const ParticleStore&>(),
+                           std::declval<const BondGroup&>(), std::declval<ParticleStore&>(),
                            std::declval<const BoxGeometry&>(), std::declval<const Communicator&>()))>>
     : std::true_type {};
 }  // namespace detail
 
-/** Run the interaction's prepare() if it has one. */
+/** Run the interaction's prepare() if it has one: a pass over all its bonds
+ *  before any force (per-cell sums, node normals written to p.normal). */
 template <class IA>
-void prepare_bonds(IA& ia, const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
+void prepare_bonds(IA& ia, const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
                    const Communicator& comm) {
   if constexpr (detail::has_prepare<IA>::value)
     ia.prepare(group, p, box, comm);
