@@ -91,7 +91,7 @@ void bind_interactions(py::module_& m) {
       .def("calc_dist",
            [](const shapes::Shape& sh, const Vec3& pos) {
              double dist;
-             Vec3 normal;
+             Vec3 normal = Vec3::Zero();
              sh.calc_dist(pos, dist, normal);
              return py::make_tuple(dist, normal);
            })

@@ -34,7 +34,7 @@ RealArray get_vectors(const System& s, const std::string& field, const IdArray& 
   const auto& p = s.particles;
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const int i = idx[n];
-    Vec3 v;
+    Vec3 v = Vec3::Zero();
     if (field == "pos")
       v = s.box.unfolded(p.pos[i], p.image[i]);
     else if (field == "pos_folded")
