@@ -1,1 +1,41 @@
-"""oif: the object-in-fluid cell model (placeholder until the OIF issue)."""
+"""oif: the object-in-fluid cell model on the lbmd engine, with the classes
+and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
+``import object_in_fluid as oif`` ports as ``import oif``.
+
+- ``oif.OifCellType`` / ``oif.OifCell``: cell templates and cells,
+- ``oif.Mesh`` and the views FixedPoint, PartPoint, Edge, Triangle, Angle,
+  ThreeNeighbors,
+- ``oif.oif_utils``: PyOIF's helper functions and VTK output of shapes,
+- ``oif.mesh_files(name)``: the shipped meshes (spheres and Evans-Fung
+  red blood cells, see ``oif/meshes/README.md``),
+- ``oif.seed_cells``: random non-overlapping placement of many cells.
+"""
+import os as _os
+
+from .oif_classes import (FixedPoint, PartPoint, Edge, Triangle, Angle, ThreeNeighbors, Mesh,  # noqa: F401
+                          OifCellType, OifCell)
+from . import oif_utils  # noqa: F401
+from .oif_utils import (output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore,  # noqa: F401
+                        output_vtk_lines)
+from .seeding import seed_cells, SeedingError  # noqa: F401
+
+MESH_DIR = _os.path.join(_os.path.dirname(__file__), "meshes")
+
+
+def available_meshes():
+    """Names of the shipped meshes (e.g. 'rbc374', 'sphere642')."""
+    names = [f[:-len("nodes.dat")] for f in _os.listdir(MESH_DIR) if f.endswith("nodes.dat")]
+    return sorted(names, key=lambda s: (s.rstrip("0123456789"), int(s[len(s.rstrip("0123456789")):] or 0)))
+
+
+def mesh_files(name):
+    """(nodes_file, triangles_file) of a shipped mesh, e.g. mesh_files('rbc374')."""
+    nodes = _os.path.join(MESH_DIR, f"{name}nodes.dat")
+    if not _os.path.isfile(nodes):
+        raise ValueError(f"oif.mesh_files: no shipped mesh '{name}'; available: {', '.join(available_meshes())}")
+    return nodes, _os.path.join(MESH_DIR, f"{name}triangles.dat")
+
+
+__all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbors", "Mesh", "OifCellType",
+           "OifCell", "oif_utils", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
+           "output_vtk_lines", "seed_cells", "SeedingError", "mesh_files", "available_meshes", "MESH_DIR"]

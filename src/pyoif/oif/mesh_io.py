@@ -1,0 +1,344 @@
+"""Reading and checking triangulated cell surfaces.
+
+A cell type's relaxed shape is a closed, orientable 2-manifold: every edge is
+shared by exactly two triangles, the triangles around every node form one fan,
+no node is unused or duplicated, no triangle is degenerate. ``read_mesh``
+checks all of that and reports the offending file and line, and (with
+``check_orientation``) makes the orientation of all triangles consistent.
+
+Orientation convention (the one of PyOIF's ``nodes.dat``/``triangles.dat``
+files, kept so that files round-trip with ESPResSo): for a stored triangle
+(A, B, C) the normal (B - A) x (C - A) points *into* the cell.
+``outward(triangles)`` gives the same triangles ordered with outward normals.
+
+Everything here works on numpy arrays; it needs no simulation system.
+"""
+import os
+
+import numpy as np
+
+#: nodes closer than this fraction of the mean edge length are duplicates
+DUPLICATE_NODE_TOLERANCE = 1e-8
+#: triangles with an area below this fraction of the mean edge length squared are degenerate
+DEGENERATE_AREA_TOLERANCE = 1e-10
+
+
+class MeshData:
+    """Checked mesh: nodes (N x 3), triangles (M x 3, PyOIF orientation) and
+    where each came from (file names and line numbers, for messages)."""
+
+    def __init__(self, nodes, triangles, nodes_file="<array>", triangles_file="<array>",
+                 node_lines=None, triangle_lines=None):
+        self.nodes = np.ascontiguousarray(nodes, dtype=float)
+        self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+        self.nodes_file = nodes_file
+        self.triangles_file = triangles_file
+        self.node_lines = (np.arange(1, len(self.nodes) + 1) if node_lines is None
+                           else np.asarray(node_lines))
+        self.triangle_lines = (np.arange(1, len(self.triangles) + 1) if triangle_lines is None
+                               else np.asarray(triangle_lines))
+        self.flipped = np.zeros(len(self.triangles), dtype=bool)
+
+
+def _where(path, line):
+    return f"{path}, line {int(line)}"
+
+
+def _read_table(path, ncols, kind, what):
+    """(values, line_numbers) of a whitespace table with ncols columns;
+    blank lines and '#' comments are skipped."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"mesh input: file name must be a string, got {type(path).__name__}")
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ValueError(f"mesh input: {what} file '{path}' does not exist")
+    rows, lines = [], []
+    with open(path, "r") as f:
+        for lineno, raw in enumerate(f, start=1):
+            text = raw.split("#", 1)[0].strip()
+            if not text:
+                continue
+            fields = text.split()
+            if len(fields) != ncols:
+                raise ValueError(f"{_where(path, lineno)}: expected {ncols} {what} values, "
+                                 f"got {len(fields)}: {raw.strip()!r}")
+            try:
+                row = [kind(x) for x in fields]
+            except ValueError:
+                raise ValueError(f"{_where(path, lineno)}: {what} values must be "
+                                 f"{'integers' if kind is int else 'numbers'}: {raw.strip()!r}") from None
+            rows.append(row)
+            lines.append(lineno)
+    if not rows:
+        raise ValueError(f"mesh input: {what} file '{path}' contains no data")
+    dtype = np.int64 if kind is int else float
+    return np.array(rows, dtype=dtype), np.array(lines)
+
+
+def read_nodes(path):
+    nodes, lines = _read_table(path, 3, float, "node coordinate")
+    bad = np.nonzero(~np.all(np.isfinite(nodes), axis=1))[0]
+    if bad.size:
+        raise ValueError(f"{_where(path, lines[bad[0]])}: node coordinates must be finite")
+    return nodes, lines
+
+
+def read_triangles(path):
+    return _read_table(path, 3, int, "triangle node index")
+
+
+def read_mesh(nodes_file, triangles_file, resize=(1.0, 1.0, 1.0), check_orientation=True):
+    """Read a mesh in PyOIF's format (or any format meshio reads, given as
+    nodes_file with triangles_file=None), check it and return MeshData."""
+    if triangles_file is None:
+        data = _read_with_meshio(nodes_file)
+    else:
+        nodes, node_lines = read_nodes(nodes_file)
+        triangles, tri_lines = read_triangles(triangles_file)
+        data = MeshData(nodes, triangles, os.fspath(nodes_file), os.fspath(triangles_file),
+                        node_lines, tri_lines)
+    data.nodes = data.nodes * np.asarray(resize, dtype=float)
+    check_mesh(data, check_orientation=check_orientation)
+    return data
+
+
+def _read_with_meshio(path):
+    """Gmsh .msh, .stl, .off, .vtk, ... through meshio (Debian python3-meshio).
+    Only triangle cells are used; STL's duplicated vertices are merged."""
+    try:
+        import meshio
+    except ImportError:  # pragma: no cover - meshio is a dependency
+        raise ValueError(f"mesh input: reading '{path}' needs meshio (Debian package python3-meshio)") from None
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ValueError(f"mesh input: mesh file '{path}' does not exist")
+    try:
+        m = meshio.read(path)
+    except Exception as e:  # meshio raises many kinds
+        raise ValueError(f"mesh input: cannot read '{path}': {e}") from None
+    tris = [c.data for c in m.cells if c.type == "triangle"]
+    if not tris:
+        raise ValueError(f"mesh input: '{path}' contains no triangles")
+    points = np.asarray(m.points, dtype=float)
+    if points.shape[1] == 2:
+        points = np.hstack([points, np.zeros((len(points), 1))])
+    triangles = np.vstack(tris).astype(np.int64)
+    # merge coincident points (STL stores every triangle's corners separately)
+    scale = np.ptp(points, axis=0).max() or 1.0
+    keys = np.round(points / scale * 1e9).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    used = np.unique(triangles)
+    if len(first) != len(points) or len(used) != len(points):
+        order = np.sort(first)
+        remap = np.empty(len(first), dtype=np.int64)
+        remap[np.argsort(first)] = np.arange(len(first))
+        triangles = remap[inverse[triangles]]
+        points = points[order]
+        used_mask = np.zeros(len(points), dtype=bool)
+        used_mask[triangles.ravel()] = True
+        if not used_mask.all():  # drop points no triangle uses (e.g. Gmsh geometry points)
+            new_index = np.cumsum(used_mask) - 1
+            triangles = new_index[triangles]
+            points = points[used_mask]
+    return MeshData(points, triangles, path, path,
+                    node_lines=np.zeros(len(points), dtype=int),
+                    triangle_lines=np.zeros(len(triangles), dtype=int))
+
+
+def edge_table(triangles):
+    """Undirected edges of the triangles: (edges E x 2 with a < b,
+    edge_of_halfedge 3M, halfedge i of triangle t is index 3 t + i,
+    going from corner i to corner i+1)."""
+    t = np.asarray(triangles)
+    src = t.ravel()
+    dst = t[:, [1, 2, 0]].ravel()
+    lo, hi = np.minimum(src, dst), np.maximum(src, dst)
+    n = int(t.max()) + 1 if t.size else 0
+    keys = lo * n + hi
+    uniq, inverse = np.unique(keys, return_inverse=True)
+    edges = np.stack([uniq // n, uniq % n], axis=1)
+    return edges, inverse.ravel()
+
+
+def check_mesh(data, check_orientation=True):
+    """Raise ValueError (file, line) if the mesh is not a closed orientable
+    2-manifold; make triangle orientation consistent (PyOIF convention) when
+    check_orientation, else only verify it."""
+    nodes, tris = data.nodes, data.triangles
+    nf, tf = data.nodes_file, data.triangles_file
+    nlines, tlines = data.node_lines, data.triangle_lines
+    n = len(nodes)
+    if len(tris) < 4:
+        raise ValueError(f"mesh input: {tf} has {len(tris)} triangles; a closed surface needs at least 4")
+    # indices in range
+    bad = np.nonzero(np.any((tris < 0) | (tris >= n), axis=1))[0]
+    if bad.size:
+        raise ValueError(f"{_where(tf, tlines[bad[0]])}: node index out of range 0..{n - 1} "
+                         f"({nf} has {n} nodes): {tris[bad[0]].tolist()}")
+    # repeated node in a triangle
+    bad = np.nonzero((tris[:, 0] == tris[:, 1]) | (tris[:, 1] == tris[:, 2]) | (tris[:, 0] == tris[:, 2]))[0]
+    if bad.size:
+        raise ValueError(f"{_where(tf, tlines[bad[0]])}: degenerate triangle (a node repeated): "
+                         f"{tris[bad[0]].tolist()}")
+    # unused nodes
+    used = np.zeros(n, dtype=bool)
+    used[tris.ravel()] = True
+    bad = np.nonzero(~used)[0]
+    if bad.size:
+        raise ValueError(f"{_where(nf, nlines[bad[0]])}: node {bad[0]} is not used by any triangle")
+    edges, he_edge = edge_table(tris)
+    lengths = np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1)
+    h = lengths.mean()
+    # duplicate nodes (coincident positions)
+    order = np.lexsort(nodes.T[::-1])
+    srt = nodes[order]
+    close = np.nonzero(np.linalg.norm(np.diff(srt, axis=0), axis=1) <= DUPLICATE_NODE_TOLERANCE * h)[0]
+    if close.size:
+        i, j = sorted((order[close[0]], order[close[0] + 1]))
+        raise ValueError(f"{_where(nf, nlines[j])}: node {j} duplicates node {i} "
+                         f"({_where(nf, nlines[i])}) at {nodes[i].tolist()}")
+    # degenerate (zero-area) triangles
+    a, b, c = nodes[tris[:, 0]], nodes[tris[:, 1]], nodes[tris[:, 2]]
+    areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    bad = np.nonzero(areas <= DEGENERATE_AREA_TOLERANCE * h * h)[0]
+    if bad.size:
+        raise ValueError(f"{_where(tf, tlines[bad[0]])}: degenerate triangle (zero area, collinear "
+                         f"nodes): {tris[bad[0]].tolist()}")
+    # every edge in exactly two triangles
+    counts = np.bincount(he_edge, minlength=len(edges))
+    for kind, mask in (("an edge shared by more than two triangles", counts > 2),
+                       ("an open edge (in only one triangle)", counts == 1)):
+        bad_edges = np.nonzero(mask)[0]
+        if bad_edges.size:
+            e = bad_edges[0]
+            hes = np.nonzero(he_edge == e)[0]
+            where = ", ".join(str(int(tlines[k // 3])) for k in hes)
+            raise ValueError(f"{_where(tf, tlines[hes[0] // 3])}: {kind}: edge {edges[e].tolist()} "
+                             f"(triangles on line(s) {where}); the mesh must be a closed surface")
+    # duplicate triangles (same node set) are caught above as edges in >2 triangles,
+    # except for a 2-triangle "pillow", excluded by len(tris) >= 4 and connectivity below.
+    _check_vertex_fans(data, edges, he_edge)
+    _orient(data, he_edge, check_orientation)
+
+
+def _check_vertex_fans(data, edges, he_edge):
+    """The triangles around each node must form a single fan (no two surface
+    sheets touching at a node)."""
+    tris, tf, tlines = data.triangles, data.triangles_file, data.triangle_lines
+    n = len(data.nodes)
+    # per node: number of incident triangles must equal number of incident edges
+    # (for a closed manifold a node's link is a cycle with as many edges as vertices);
+    # if a node's link has several cycles the link is still balanced, so count
+    # connected link cycles through a union-find on incident triangles sharing an edge.
+    tri_count = np.bincount(tris.ravel(), minlength=n)
+    # walk: for every node, start at one incident triangle and rotate around
+    # the node through the shared edges; the fan must reach all incident triangles.
+    he_of_edge = [[] for _ in range(len(edges))]
+    for k, e in enumerate(he_edge):
+        he_of_edge[e].append(k)
+    incident = [[] for _ in range(n)]
+    for t, row in enumerate(tris):
+        for v in row:
+            incident[v].append(t)
+    for v in range(n):
+        start = incident[v][0]
+        seen = {start}
+        t = start
+        prev_edge = -1
+        while True:
+            row = tris[t]
+            corner = int(np.nonzero(row == v)[0][0])
+            # the two half-edges of t touching v: (corner-1 -> corner) and (corner -> corner+1)
+            e_in = he_edge[3 * t + (corner - 1) % 3]
+            e_out = he_edge[3 * t + corner]
+            e_next = e_out if e_out != prev_edge else e_in
+            other = [k for k in he_of_edge[e_next] if k // 3 != t]
+            t_next = other[0] // 3
+            prev_edge = e_next
+            if t_next in seen:
+                break
+            seen.add(t_next)
+            t = t_next
+        if len(seen) != tri_count[v]:
+            missing = next(x for x in incident[v] if x not in seen)
+            raise ValueError(f"{_where(tf, tlines[missing])}: node {v} joins separate sheets of "
+                             f"surface (its triangles do not form one fan); the mesh must be a "
+                             f"2-manifold")
+
+
+def _orient(data, he_edge, fix):
+    """Make orientation consistent across every edge (breadth-first over
+    triangles), check there is one connected surface, and choose the global
+    sign so that normals (B - A) x (C - A) point inward (PyOIF convention)."""
+    tris, tf, tlines = data.triangles, data.triangles_file, data.triangle_lines
+    m = len(tris)
+    # neighbour across each half-edge
+    partner = np.empty(3 * m, dtype=np.int64)
+    order = np.argsort(he_edge, kind="stable")
+    pairs = order.reshape(-1, 2)
+    partner[pairs[:, 0]] = pairs[:, 1]
+    partner[pairs[:, 1]] = pairs[:, 0]
+    src = tris.ravel()
+    # same direction across an edge => inconsistent orientation
+    flip = np.zeros(m, dtype=bool)
+    visited = np.zeros(m, dtype=bool)
+    visited[0] = True
+    queue = [0]
+    head = 0
+    while head < len(queue):
+        t = queue[head]
+        head += 1
+        for i in range(3):
+            k = 3 * t + i
+            q = partner[k]
+            u = q // 3
+            same_dir = src[k] == src[q]  # both half-edges start at the same node
+            # effective relation once t's own flip is applied
+            needs_flip = bool(same_dir) != bool(flip[t])
+            if not visited[u]:
+                visited[u] = True
+                flip[u] = needs_flip
+                queue.append(u)
+            elif flip[u] != needs_flip:
+                raise ValueError(f"{_where(tf, tlines[u])}: the surface is not orientable "
+                                 f"(Moebius-like); triangles on lines {tlines[t]} and {tlines[u]} "
+                                 f"cannot be oriented consistently")
+    if not visited.all():
+        u = int(np.nonzero(~visited)[0][0])
+        raise ValueError(f"{_where(tf, tlines[u])}: the mesh has more than one connected surface "
+                         f"(this triangle is not connected to the one on line {tlines[0]})")
+    if flip.any() and not fix:
+        u = int(np.nonzero(flip)[0][0])
+        if flip.sum() > m / 2:
+            u = int(np.nonzero(~flip)[0][0])
+        raise ValueError(f"{_where(tf, tlines[u])}: triangle {tris[u].tolist()} is oriented "
+                         f"opposite to its neighbours; pass check_orientation=True to fix it")
+    new = tris.copy()
+    new[flip] = new[flip][:, [0, 2, 1]]
+    if signed_volume(data.nodes, new) > 0:  # outward normals: flip all to PyOIF's inward convention
+        new = new[:, [0, 2, 1]]
+        flip = ~flip
+    data.triangles = new
+    data.flipped = flip
+
+
+def outward(triangles):
+    """Triangles reordered so that (B - A) x (C - A) points out of the cell."""
+    return np.asarray(triangles)[:, [0, 2, 1]]
+
+
+def signed_volume(nodes, triangles):
+    """Volume enclosed by triangles whose normals (B - A) x (C - A) point
+    outward (negative for PyOIF's inward order): divergence theorem,
+    V = 1/6 sum A . (B x C)."""
+    a, b, c = nodes[triangles[:, 0]], nodes[triangles[:, 1]], nodes[triangles[:, 2]]
+    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+
+
+def write_nodes(path, nodes):
+    np.savetxt(path, nodes, fmt="%.15g")
+
+
+def write_triangles(path, triangles):
+    np.savetxt(path, triangles, fmt="%d")

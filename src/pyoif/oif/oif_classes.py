@@ -1,0 +1,984 @@
+"""The object-in-fluid cell model with PyOIF's classes and keywords.
+
+``OifCellType`` reads and checks a relaxed mesh once, computes every
+reference value (edge lengths, dihedral angles, triangle areas, surface,
+volume) as numpy arrays and registers one ``OifLocalForces``, one
+``OifGlobalForces`` and (``normal=True``) one ``OifOutDirection`` bonded
+interaction for all its cells. ``OifCell`` adds a cell's particles and all
+its bonds with a few bulk engine calls. The PyOIF objects FixedPoint,
+PartPoint, Edge, Triangle, Angle and ThreeNeighbors are views created on
+demand (``mesh.points``, ``mesh.triangles``, ...) for scripts that use them.
+
+Orientation: stored triangles follow PyOIF's files, (B - A) x (C - A)
+pointing into the cell; the engine's triangle bonds get them outward.
+"""
+import itertools
+import numbers
+import os
+
+import numpy as np
+
+import lbmd
+from lbmd.particle_data import ParticleHandle, ParticleSlice
+
+from . import geometry as geo
+from . import mesh_io
+from . import vtk as _vtk
+from .oif_utils import (large_number, small_epsilon, custom_str, norm, vec_distance,  # noqa: F401
+                        get_triangle_normal, area_triangle, angle_btw_triangles, angle_btw_vectors)
+
+#: PyOIF's exclusion_neighbours=True excluded the first and second mesh neighbours
+DEFAULT_EXCLUSION_RINGS = 2
+
+
+def _real(owner, name, value, check=None):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+        raise TypeError(f"{owner}: parameter '{name}' must be a finite number, got {value!r}")
+    value = float(value)
+    if check == "nonneg" and value < 0:
+        raise ValueError(f"{owner}: parameter '{name}' must be >= 0, got {value!r}")
+    if check == "pos" and value <= 0:
+        raise ValueError(f"{owner}: parameter '{name}' must be > 0, got {value!r}")
+    return value
+
+
+def _vec3(owner, name, value, positive=False):
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{owner}: parameter '{name}' must be 3 numbers, got {value!r}") from None
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{owner}: parameter '{name}' must be 3 finite numbers, got {value!r}")
+    if positive and not np.all(arr > 0):
+        raise ValueError(f"{owner}: parameter '{name}' must be positive in every component, got {value!r}")
+    return arr
+
+
+def _check_system(owner, system):
+    if not isinstance(system, lbmd.System):
+        raise TypeError(f"{owner}: parameter 'system' must be an lbmd.System, got {type(system).__name__}")
+
+
+# ---------------------------------------------------------------------------
+# point / edge / triangle / angle views (PyOIF API)
+# ---------------------------------------------------------------------------
+class FixedPoint:
+    """A mesh node not connected to a particle (the cell type's relaxed mesh)."""
+
+    def __init__(self, pos, id):
+        if isinstance(id, bool) or not isinstance(id, (int, np.integer)):
+            raise TypeError(f"FixedPoint: id must be an integer, got {id!r}")
+        pos = _vec3("FixedPoint", "pos", pos)
+        self.x, self.y, self.z = (float(c) for c in pos)
+        self.id = int(id)
+        self.neighbour_ids = []
+
+    def get_pos(self):
+        return np.array([self.x, self.y, self.z])
+
+    def get_id(self):
+        return self.id
+
+
+class PartPoint:
+    """A mesh node of a cell: a view of its particle."""
+
+    def __init__(self, part, id, part_id):
+        if not isinstance(part, ParticleHandle):
+            raise TypeError(f"PartPoint: part must be a particle handle, got {type(part).__name__}")
+        self.part = part
+        self.id = int(id)
+        self.part_id = int(part_id)
+        self.neighbour_ids = []
+
+    def get_pos(self):
+        return self.part.pos
+
+    def get_part_id(self):
+        return self.part_id
+
+    def get_vel(self):
+        return self.part.v
+
+    def get_mass(self):
+        return self.part.mass
+
+    def get_type(self):
+        return self.part.type
+
+    def get_force(self):
+        return self.part.f
+
+    def set_pos(self, pos):
+        self.part.pos = pos
+
+    def set_vel(self, vel):
+        self.part.v = vel
+
+    def set_force(self, force):
+        self.part.ext_force = force
+
+    def kill_motion(self):
+        self.part.fix = [True, True, True]
+
+    def unkill_motion(self):
+        self.part.fix = [False, False, False]
+
+
+def _check_points(owner, pts):
+    for p in pts:
+        if not isinstance(p, (FixedPoint, PartPoint)):
+            raise TypeError(f"{owner}: arguments must be FixedPoint or PartPoint, got {type(p).__name__}")
+
+
+class Edge:
+    def __init__(self, A, B):
+        _check_points("Edge", (A, B))
+        self.A, self.B = A, B
+
+    def length(self):
+        return vec_distance(self.A.get_pos(), self.B.get_pos())
+
+
+class Triangle:
+    """Triangle (A, B, C); (B - A) x (C - A) points into the cell."""
+
+    def __init__(self, A, B, C):
+        _check_points("Triangle", (A, B, C))
+        self.A, self.B, self.C = A, B, C
+
+    def area(self):
+        return area_triangle(self.A.get_pos(), self.B.get_pos(), self.C.get_pos())
+
+
+class Angle:
+    """Two triangles (A, B, C) and (B, C, D) sharing the edge BC."""
+
+    def __init__(self, A, B, C, D):
+        _check_points("Angle", (A, B, C, D))
+        self.A, self.B, self.C, self.D = A, B, C, D
+
+    def size(self):
+        return angle_btw_triangles(self.A.get_pos(), self.B.get_pos(), self.C.get_pos(), self.D.get_pos())
+
+
+class ThreeNeighbors:
+    """Three well-spread neighbours of a node; their plane's normal
+    (B - A) x (C - A) points out of the cell."""
+
+    def __init__(self, A, B, C):
+        _check_points("ThreeNeighbors", (A, B, C))
+        self.A, self.B, self.C = A, B, C
+
+    def outer_normal(self):
+        return get_triangle_normal(self.A.get_pos(), self.B.get_pos(), self.C.get_pos())
+
+
+# ---------------------------------------------------------------------------
+# topology (shared by a cell type and its cells)
+# ---------------------------------------------------------------------------
+class _Topology:
+    """Index arrays of a checked mesh: triangles (PyOIF order), edges (a < b),
+    angles (C, a, b, D) per edge, node adjacency."""
+
+    def __init__(self, triangles, n_nodes):
+        self.n_nodes = n_nodes
+        self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+        self.edges, he_edge = mesh_io.edge_table(self.triangles)
+        t = self.triangles
+        src = t.ravel()
+        opposite = t[:, [2, 0, 1]].ravel()  # corner opposite to half-edge i -> i+1
+        # for edge (a, b), a < b: D is opposite the half-edge a -> b, C opposite b -> a
+        # (PyOIF's Mesh: D in the triangle that lists a, b in this cyclic order)
+        forward = src == self.edges[he_edge, 0]
+        d = np.empty(len(self.edges), dtype=np.int64)
+        c = np.empty(len(self.edges), dtype=np.int64)
+        d[he_edge[forward]] = opposite[forward]
+        c[he_edge[~forward]] = opposite[~forward]
+        self.angles = np.stack([c, self.edges[:, 0], self.edges[:, 1], d], axis=1)
+        self._neighbours = None
+        self._exclusions = {}
+
+    @property
+    def neighbour_lists(self):
+        if self._neighbours is None:
+            nb = [[] for _ in range(self.n_nodes)]
+            for a, b in self.edges.tolist():
+                nb[a].append(b)
+                nb[b].append(a)
+            self._neighbours = nb
+        return self._neighbours
+
+    def adjacency(self):
+        from scipy.sparse import coo_matrix
+        e = self.edges
+        n = self.n_nodes
+        data = np.ones(2 * len(e), dtype=np.int32)
+        return coo_matrix((data, (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(n, n)).tocsr()
+
+    def ring_pairs(self, rings):
+        """Pairs (i < j) of nodes at most `rings` edges apart (breadth-first
+        distance on the edge graph)."""
+        key = ("rings", rings)
+        if key not in self._exclusions:
+            if rings <= 0:
+                pairs = np.zeros((0, 2), dtype=np.int64)
+            else:
+                from scipy.sparse import identity
+                adj = self.adjacency()
+                reach = identity(self.n_nodes, dtype=np.int32, format="csr")
+                for _ in range(rings):
+                    reach = reach + reach @ adj
+                    reach.data[:] = 1
+                coo = reach.tocoo()
+                mask = coo.row < coo.col
+                pairs = np.stack([coo.row[mask], coo.col[mask]], axis=1).astype(np.int64)
+            self._exclusions[key] = pairs
+        return self._exclusions[key]
+
+
+# ---------------------------------------------------------------------------
+# Mesh
+# ---------------------------------------------------------------------------
+class Mesh:
+    """A triangulated surface: the relaxed mesh of a cell type (nodes are
+    FixedPoints) or the mesh of a cell (nodes are particles).
+
+    Arrays: ``triangle_ids`` (M x 3, PyOIF orientation), ``edge_ids`` (E x 2),
+    ``angle_ids`` (E x 4 rows (A, B, C, D), shared edge BC),
+    ``part_ids`` (N, cells only). Lists of view objects, built on first use:
+    ``points``, ``edges``, ``triangles``, ``angles``, ``neighbors``.
+    """
+
+    def __init__(self, nodes_file=None, triangles_file=None, system=None, resize=(1.0, 1.0, 1.0),
+                 particle_type=-1, particle_mass=1.0, normal=False, check_orientation=True):
+        _check_system("Mesh", system)
+        self.system = system
+        self.normal = bool(normal)
+        self.nodes_file = None if nodes_file is None else os.fspath(nodes_file)
+        self.triangles_file = None if triangles_file in (None, "") else os.fspath(triangles_file)
+        self._nodes = None       # relaxed node positions (cell type) or None (cell)
+        self._parts = None       # ParticleSlice (cell)
+        self.part_ids = None
+        self._topo = None
+        self._views = {}
+        self.ids_extremal_points = [0] * 6
+        if nodes_file is not None:
+            resize = _vec3("Mesh", "resize", resize, positive=True)
+            data = mesh_io.read_mesh(nodes_file, self.triangles_file, resize=resize,
+                                     check_orientation=bool(check_orientation))
+            self._set_arrays(data.nodes, _Topology(data.triangles, len(data.nodes)))
+            self.flipped_triangles = data.flipped
+
+    # -- construction -------------------------------------------------------
+    def _set_arrays(self, nodes, topo):
+        self._nodes = np.ascontiguousarray(nodes, dtype=float)
+        self._topo = topo
+        self._views = {}
+        self.ids_extremal_points = [int(i) for pair in zip(self._nodes.argmin(axis=0),
+                                                           self._nodes.argmax(axis=0)) for i in pair]
+
+    @classmethod
+    def from_arrays(cls, system, nodes, triangles, check_orientation=True):
+        """A mesh from arrays (nodes N x 3, triangles M x 3), checked like a file."""
+        m = cls(system=system)
+        data = mesh_io.MeshData(nodes, triangles)
+        mesh_io.check_mesh(data, check_orientation=check_orientation)
+        m._set_arrays(data.nodes, _Topology(data.triangles, len(data.nodes)))
+        m.flipped_triangles = data.flipped
+        return m
+
+    def copy(self, origin=None, particle_type=-1, particle_mass=1.0, rotate=None, mol_id=None):
+        """A cell's mesh: particles at the (rotated, moved) nodes of this one."""
+        pos = self._nodes
+        if rotate is not None:
+            pos = pos @ geo.rotation_matrix(_vec3("Mesh.copy", "rotate", rotate)).T
+            pos = np.where(np.abs(pos) < small_epsilon, 0.0, pos)  # as PyOIF's discard_epsilon
+        if origin is not None:
+            pos = pos + _vec3("Mesh.copy", "origin", origin)
+        mesh = Mesh(system=self.system)
+        mesh.normal = self.normal
+        mesh.nodes_file, mesh.triangles_file = self.nodes_file, self.triangles_file
+        mesh._topo = self._topo
+        mesh.ids_extremal_points = list(self.ids_extremal_points)
+        mesh._parts = self.system.part.add(pos=pos, type=int(particle_type), mass=float(particle_mass),
+                                           mol_id=int(particle_type if mol_id is None else mol_id))
+        mesh.part_ids = mesh._parts.id
+        return mesh
+
+    # -- arrays ---------------------------------------------------------------
+    @property
+    def triangle_ids(self):
+        return self._topo.triangles
+
+    @property
+    def edge_ids(self):
+        return self._topo.edges
+
+    @property
+    def angle_ids(self):
+        return self._topo.angles
+
+    def positions(self):
+        """Node positions (N x 3): unfolded particle positions for a cell."""
+        if self._parts is not None:
+            return self._parts.pos
+        return self._nodes.copy()
+
+    # -- PyOIF view lists -------------------------------------------------------
+    def _point_list(self):
+        if "points" not in self._views:
+            nb = self._topo.neighbour_lists
+            if self._parts is None:
+                pts = [FixedPoint(p, i) for i, p in enumerate(self._nodes)]
+            else:
+                pts = [PartPoint(ParticleHandle(self.system, int(pid)), i, int(pid))
+                       for i, pid in enumerate(self.part_ids)]
+            for p in pts:
+                p.neighbour_ids = list(nb[p.id])
+            self._views["points"] = pts
+        return self._views["points"]
+
+    @property
+    def points(self):
+        return self._point_list()
+
+    @property
+    def edges(self):
+        if "edges" not in self._views:
+            p = self._point_list()
+            self._views["edges"] = [Edge(p[a], p[b]) for a, b in self.edge_ids.tolist()]
+        return self._views["edges"]
+
+    @property
+    def triangles(self):
+        if "triangles" not in self._views:
+            p = self._point_list()
+            self._views["triangles"] = [Triangle(p[a], p[b], p[c]) for a, b, c in self.triangle_ids.tolist()]
+        return self._views["triangles"]
+
+    @triangles.setter
+    def triangles(self, value):
+        """Replace the triangle list (as PyOIF scripts may do, e.g. to analyse
+        a subset); the mesh's own topology arrays are not changed."""
+        value = list(value)
+        for t in value:
+            if not isinstance(t, Triangle):
+                raise TypeError(f"Mesh.triangles: items must be Triangle objects, got {type(t).__name__}")
+        self._views["triangles"] = value
+        self._triangle_override = np.array([[t.A.id, t.B.id, t.C.id] for t in value],
+                                           dtype=np.int64).reshape(-1, 3)
+
+    @property
+    def angles(self):
+        if "angles" not in self._views:
+            p = self._point_list()
+            self._views["angles"] = [Angle(p[a], p[b], p[c], p[d]) for a, b, c, d in self.angle_ids.tolist()]
+        return self._views["angles"]
+
+    @property
+    def neighbors(self):
+        """ThreeNeighbors per node (PyOIF's normal=True choice: the three
+        neighbours whose unit directions add up to the shortest vector,
+        ordered so that their plane's normal points outward)."""
+        if "neighbors" not in self._views:
+            p = self._point_list()
+            if not self.normal:
+                self._views["neighbors"] = [ThreeNeighbors(q, q, q) for q in p]
+            else:
+                pos = self.positions()
+                vnormal = self._vertex_normals(pos)
+                out = []
+                for i, nb in enumerate(self._topo.neighbour_lists):
+                    u = pos[nb] - pos[i]
+                    u /= np.linalg.norm(u, axis=1)[:, None]
+                    best = min(itertools.combinations(range(len(nb)), 3),
+                               key=lambda c: np.linalg.norm(u[c[0]] + u[c[1]] + u[c[2]]))
+                    a, b, c = (nb[k] for k in best)
+                    if np.dot(np.cross(pos[b] - pos[a], pos[c] - pos[a]), vnormal[i]) < 0:
+                        b, c = c, b
+                    out.append(ThreeNeighbors(p[a], p[b], p[c]))
+                self._views["neighbors"] = out
+        return self._views["neighbors"]
+
+    def _vertex_normals(self, pos):
+        """Area-weighted outward normal at every node."""
+        n = -geo.triangle_normals(pos, self.triangle_ids)
+        acc = np.zeros_like(pos)
+        for k in range(3):
+            np.add.at(acc, self.triangle_ids[:, k], n)
+        return acc / np.linalg.norm(acc, axis=1)[:, None]
+
+    # -- analysis ---------------------------------------------------------------
+    def _analysis_triangles(self):
+        return getattr(self, "_triangle_override", self.triangle_ids)
+
+    def get_n_nodes(self):
+        return self._topo.n_nodes
+
+    def get_n_triangles(self):
+        return len(self.triangle_ids)
+
+    def get_n_edges(self):
+        return len(self.edge_ids)
+
+    def surface(self):
+        return geo.surface(self.positions(), self._analysis_triangles())
+
+    def volume(self):
+        return geo.volume(self.positions(), self._analysis_triangles())
+
+    def _edge_lengths(self):
+        if len(self.edge_ids) == 0:
+            raise ValueError("Mesh: the mesh has no edges")
+        return geo.edge_lengths(self.positions(), self.edge_ids)
+
+    def min_edge_length(self):
+        return float(self._edge_lengths().min())
+
+    def max_edge_length(self):
+        return float(self._edge_lengths().max())
+
+    def aver_edge_length(self):
+        return float(self._edge_lengths().mean())
+
+    def stdev_edge_length(self):
+        return float(self._edge_lengths().std(ddof=1))
+
+    def angle_sizes(self):
+        """Dihedral angle of every angle_ids row (PyOIF's definition)."""
+        return geo.dihedral_angles(self.positions(), self.angle_ids)
+
+    def min_angle(self):
+        """(smallest dihedral angle, the ids of its four nodes A, B, C, D):
+        the most strongly bent place of the membrane (PyOIF paper's
+        extensibility example). Node ids are mesh ids (``part_ids[ids]``
+        gives a cell's particle ids)."""
+        phi = self.angle_sizes()
+        k = int(np.argmin(phi))
+        return float(phi[k]), [int(i) for i in self.angle_ids[k]]
+
+    def print_analysis(self):
+        print("\t n_nodes: " + str(self.get_n_nodes()))
+        print("\t n_triangles: " + str(self.get_n_triangles()))
+        print("\t n_edges: " + str(self.get_n_edges()))
+        print("\t aver_edge_length: " + str(self.aver_edge_length()))
+        print("\t min_edge_length: " + str(self.min_edge_length()))
+        print("\t max_edge_length: " + str(self.max_edge_length()))
+        print("\t stdev_edge_length: " + str(self.stdev_edge_length()))
+
+    def total_fluid_force(self, lbfluid, friction):
+        """Sum over nodes of friction (u - v): the fluid's force on the cell."""
+        pos = self.positions()
+        vel = self._parts.v if self._parts is not None else np.zeros_like(pos)
+        u = np.array([lbfluid.get_interpolated_velocity(p) for p in pos])
+        return friction * (u - vel).sum(axis=0)
+
+    def check_orientation(self):
+        """Re-check this mesh's triangles (closed 2-manifold, consistent
+        orientation, PyOIF's inward order); fixes orientation in place."""
+        data = mesh_io.MeshData(self.positions(), self.triangle_ids, self.nodes_file or "<mesh>",
+                                self.triangles_file or "<mesh>")
+        mesh_io.check_mesh(data, check_orientation=True)
+        self._topo = _Topology(data.triangles, len(data.nodes))
+        self._views = {}
+        return 0
+
+    def output_mesh_triangles(self, triangles_file=None):
+        """Write the (checked, consistently oriented) triangles in PyOIF's format."""
+        if triangles_file is None:
+            raise ValueError("Mesh.output_mesh_triangles: parameter 'triangles_file' is required")
+        if _vtk._is_writer():
+            mesh_io.write_triangles(triangles_file, self.triangle_ids)
+        return 0
+
+    def output_mesh_nodes(self, nodes_file=None):
+        """Write the node positions (relaxed mesh, or a cell's current ones) in PyOIF's format."""
+        if nodes_file is None:
+            raise ValueError("Mesh.output_mesh_nodes: parameter 'nodes_file' is required")
+        if _vtk._is_writer():
+            mesh_io.write_nodes(nodes_file, self.positions())
+        return 0
+
+    def mirror(self, mirror_x=0, mirror_y=0, mirror_z=0, out_file_name=""):
+        """Write the nodes mirrored along one axis to out_file_name (PyOIF)."""
+        if out_file_name == "":
+            raise ValueError("Mesh.mirror: parameter 'out_file_name' is required")
+        flags = (mirror_x, mirror_y, mirror_z)
+        if any(f not in (0, 1) for f in flags):
+            raise ValueError(f"Mesh.mirror: mirror_x, mirror_y, mirror_z must be 0 or 1, got {flags}")
+        if sum(flags) > 1:
+            raise ValueError("Mesh.mirror: mirror along one axis only")
+        pos = self.positions()
+        pos[:, np.array(flags, dtype=bool)] *= -1.0
+        if sum(flags) == 1 and _vtk._is_writer():
+            mesh_io.write_nodes(out_file_name, pos)
+        return 0
+
+
+# ---------------------------------------------------------------------------
+# OifCellType
+# ---------------------------------------------------------------------------
+class OifCellType:
+    """A template for cells: relaxed mesh + elastic moduli.
+
+    ``OifCellType(nodes_file, triangles_file, system, resize=(1, 1, 1),
+    ks=0, kslin=0, kb=0, kal=0, kag=0, kv=0, kvisc=0, normal=False,
+    check_orientation=True)``
+
+    nodes_file/triangles_file: PyOIF's ``nodes.dat``/``triangles.dat`` (or a
+    single Gmsh/STL/OFF file as nodes_file with triangles_file="");
+    ``oif.mesh_files("rbc374")`` gives the shipped ones. resize scales x, y,
+    z. ks (neo-Hookean) or kslin (linear) stretching, kb bending, kal local
+    area, kag global area, kv volume, kvisc membrane viscosity (model eqs.
+    3-7). normal=True computes outward node normals each step (needed by
+    membrane collision).
+    """
+
+    def __init__(self, nodes_file="", triangles_file="", system=None, resize=(1.0, 1.0, 1.0), ks=0.0,
+                 kslin=0.0, kb=0.0, kal=0.0, kag=0.0, kv=0.0, kvisc=0.0, normal=False,
+                 check_orientation=True):
+        owner = "OifCellType"
+        _check_system(owner, system)
+        if nodes_file in ("", None):
+            raise ValueError(f"{owner}: parameter 'nodes_file' is required")
+        if not isinstance(nodes_file, (str, os.PathLike)) or not isinstance(triangles_file, (str, os.PathLike, type(None))):
+            raise TypeError(f"{owner}: file names must be strings")
+        if triangles_file in ("", None) and str(nodes_file).endswith(".dat"):
+            raise ValueError(f"{owner}: parameter 'triangles_file' is required with a nodes.dat file")
+        for name, value in (("normal", normal), ("check_orientation", check_orientation)):
+            if not isinstance(value, (bool, np.bool_)):
+                raise TypeError(f"{owner}: parameter '{name}' must be True or False, got {value!r}")
+        moduli = {k: _real(owner, k, v, "nonneg") for k, v in
+                  (("ks", ks), ("kslin", kslin), ("kb", kb), ("kal", kal), ("kag", kag), ("kv", kv),
+                   ("kvisc", kvisc))}
+        if moduli["ks"] != 0 and moduli["kslin"] != 0:
+            raise ValueError(f"{owner}: use either 'ks' (neo-Hookean) or 'kslin' (linear) "
+                             f"stretching, not both (got ks={ks}, kslin={kslin})")
+        self.system = system
+        self.resize = tuple(float(x) for x in _vec3(owner, "resize", resize, positive=True))
+        self.mesh = Mesh(nodes_file=nodes_file, triangles_file=triangles_file, system=system,
+                         resize=self.resize, normal=bool(normal), check_orientation=bool(check_orientation))
+        for k, v in moduli.items():
+            setattr(self, k, v)
+        self.normal = bool(normal)
+        self.check_orientation = bool(check_orientation)
+
+        nodes, topo = self.mesh._nodes, self.mesh._topo
+        # reference values of each angle row (A, B, C, D): edge BC, dihedral, areas ABC, DBC
+        ang = topo.angles
+        self.r0 = geo.edge_lengths(nodes, ang[:, [1, 2]])
+        self.phi0 = geo.dihedral_angles(nodes, ang)
+        self.A01 = geo.triangle_areas(nodes, ang[:, [0, 1, 2]])
+        self.A02 = geo.triangle_areas(nodes, ang[:, [3, 1, 2]])
+        self.surface0 = geo.surface(nodes, topo.triangles)
+        self.volume0 = geo.volume(nodes, topo.triangles)
+
+        self.local_force_interaction = None
+        self.global_force_interaction = None
+        self.out_direction_interaction = None
+        inter = lbmd.interactions
+        if any(moduli[k] != 0 for k in ("ks", "kslin", "kb", "kal", "kvisc")):
+            self.local_force_interaction = inter.OifLocalForces(
+                r0=float(self.r0[0]), ks=self.ks, kslin=self.kslin, phi0=float(self.phi0[0]), kb=self.kb,
+                A01=float(self.A01[0]), A02=float(self.A02[0]), kal=self.kal, kvisc=self.kvisc)
+            self.local_bond_id = system.bonded_inter.add(self.local_force_interaction)
+        if self.kag != 0 or self.kv != 0:
+            self.global_force_interaction = inter.OifGlobalForces(
+                A0_g=self.surface0, ka_g=self.kag, V0=self.volume0, kv=self.kv)
+            self.global_bond_id = system.bonded_inter.add(self.global_force_interaction)
+        if self.normal:
+            self.out_direction_interaction = inter.OifOutDirection()
+            self.out_direction_bond_id = system.bonded_inter.add(self.out_direction_interaction)
+
+    # engine bond rows, in mesh node ids -------------------------------------
+    def _local_rows(self):
+        """OifLocalForces rows as ESPResSo's PyOIF added them: the bond is owned
+        by B (first edge node) with partners A, C, D; per bond (r0, phi0, A01, A02)."""
+        ang = self.mesh.angle_ids
+        return ang[:, [1, 0, 2, 3]], np.stack([self.r0, self.phi0, self.A01, self.A02], axis=1)
+
+    def _triangle_rows(self):
+        """Triangles with outward normals (B - A) x (C - A), for
+        OifGlobalForces and OifOutDirection."""
+        return mesh_io.outward(self.mesh.triangle_ids)
+
+    @property
+    def local_force_interactions(self):
+        """PyOIF's list of [interaction, [A, B, C, D]] per angle (one shared
+        interaction here; reference values are per bond)."""
+        return [[self.local_force_interaction, [a.A, a.B, a.C, a.D]] for a in self.mesh.angles]
+
+    def print_info(self):
+        print("\nThe following OifCellType was created: ")
+        print("\t nodes_file: " + str(self.mesh.nodes_file))
+        print("\t triangles_file: " + str(self.mesh.triangles_file))
+        print("\t n_nodes: " + str(self.mesh.get_n_nodes()))
+        print("\t n_triangles: " + str(self.mesh.get_n_triangles()))
+        print("\t n_edges: " + str(self.mesh.get_n_edges()))
+        for k in ("ks", "kslin", "kb", "kal", "kag", "kv", "kvisc"):
+            print(f"\t {k}: " + custom_str(getattr(self, k)))
+        print("\t normal: " + str(self.normal))
+        print("\t resize: " + str(self.resize))
+        print("\t surface: " + custom_str(self.surface0))
+        print("\t volume: " + custom_str(self.volume0))
+        print(" ")
+
+    def suggest_LBgamma(self, visc=None, dens=None):
+        """PyOIF's empirical fluid-coupling friction for this mesh density,
+        fluid viscosity and density (lattice units): calibrated on the drag
+        of a 393-node sphere of surface 201.06 (Jancigova, Tothova et al.),
+        scaled by node density."""
+        visc = _real("suggest_LBgamma", "visc", visc, "pos")
+        dens = _real("suggest_LBgamma", "dens", dens, "pos")
+        n = self.mesh.get_n_nodes()
+        return (393.0 / n) * np.sqrt(self.surface0 / 201.0619) * (
+            (5.6 - 1.82) / (5.853658537 - 1.5) * (visc - 1.5)
+            + (10 - 1.82) / (6 - 1.025) * (dens - 1.025) + 1.82)
+
+    def exclusion_pairs(self, rings=DEFAULT_EXCLUSION_RINGS, distance=None):
+        """Node pairs (i < j, mesh ids) excluded from self-cell contacts: up to
+        `rings` edges apart, and (distance) closer than that in the relaxed mesh."""
+        pairs = self.mesh._topo.ring_pairs(int(rings))
+        if distance is not None and distance > 0:
+            key = ("distance", float(distance))
+            cache = self.mesh._topo._exclusions
+            if key not in cache:
+                from scipy.spatial import cKDTree
+                close = np.array(sorted(cKDTree(self.mesh._nodes).query_pairs(float(distance))),
+                                 dtype=np.int64).reshape(-1, 2)
+                cache[key] = close
+            pairs = np.unique(np.vstack([pairs, cache[key]]), axis=0)
+        return pairs
+
+
+# ---------------------------------------------------------------------------
+# OifCell
+# ---------------------------------------------------------------------------
+class OifCell:
+    """One cell: particles at the nodes of its type's mesh, with all bonds.
+
+    ``OifCell(cell_type, particle_type, origin, particle_mass=1.0,
+    rotate=None, exclusion_neighbours=True, self_cell_cutoff=None,
+    rotation_ids=())``
+
+    origin: where the mesh's (0, 0, 0) goes; rotate: angles about x, y, z
+    (PyOIF's convention); exclusion_neighbours: True (PyOIF: first and second
+    mesh neighbours), False, or the number of edge rings to exclude from
+    self-cell contacts; self_cell_cutoff: also exclude node pairs closer than
+    this in the relaxed mesh (so a self-cell soft sphere with this cutoff is
+    silent in the relaxed shape). Each cell gets its own mol_id (``cell_id``),
+    so cells of one particle type still collide with each other.
+    """
+
+    def __init__(self, cell_type=None, origin=None, particle_type=None, particle_mass=1.0, rotate=None,
+                 exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=()):
+        owner = "OifCell"
+        if not isinstance(cell_type, OifCellType):
+            raise TypeError(f"{owner}: parameter 'cell_type' must be an OifCellType, got {type(cell_type).__name__}")
+        if origin is None:
+            raise TypeError(f"{owner}: missing required parameter 'origin'")
+        origin = _vec3(owner, "origin", origin)
+        if isinstance(particle_type, bool) or not isinstance(particle_type, (int, np.integer)) or particle_type < 0:
+            raise TypeError(f"{owner}: parameter 'particle_type' must be an integer >= 0, got {particle_type!r}")
+        particle_mass = _real(owner, "particle_mass", particle_mass, "pos")
+        if rotate is not None:
+            rotate = _vec3(owner, "rotate", rotate)
+        if isinstance(exclusion_neighbours, (bool, np.bool_)):
+            rings = DEFAULT_EXCLUSION_RINGS if exclusion_neighbours else 0
+        elif isinstance(exclusion_neighbours, (int, np.integer)) and exclusion_neighbours >= 0:
+            rings = int(exclusion_neighbours)
+        else:
+            raise TypeError(f"{owner}: parameter 'exclusion_neighbours' must be True, False or a "
+                            f"number of edge rings >= 0, got {exclusion_neighbours!r}")
+        if self_cell_cutoff is not None:
+            self_cell_cutoff = _real(owner, "self_cell_cutoff", self_cell_cutoff, "nonneg")
+
+        system = cell_type.system
+        self.cell_type = cell_type
+        self.system = system
+        self.cell_id = int(system.max_oif_objects)
+        system.max_oif_objects = self.cell_id + 1
+        self.particle_type = int(particle_type)
+        self.particle_mass = particle_mass
+        self.origin = origin
+        self.rotate = rotate
+        self.exclusion_neighbours = exclusion_neighbours
+        self.self_cell_cutoff = self_cell_cutoff
+        self.mesh = cell_type.mesh.copy(origin=origin, particle_type=particle_type,
+                                        particle_mass=particle_mass, rotate=rotate, mol_id=self.cell_id)
+        ids = self.mesh.part_ids
+        part = system.part
+        if cell_type.local_force_interaction is not None:
+            rows, per_bond = cell_type._local_rows()
+            part.add_bonds(cell_type.local_force_interaction, ids[rows], per_bond)
+        tri_rows = None
+        if cell_type.global_force_interaction is not None:
+            tri_rows = ids[cell_type._triangle_rows()]
+            part.add_bonds(cell_type.global_force_interaction, tri_rows)
+        if cell_type.out_direction_interaction is not None:
+            if tri_rows is None:
+                tri_rows = ids[cell_type._triangle_rows()]
+            part.add_bonds(cell_type.out_direction_interaction, tri_rows)
+        pairs = cell_type.exclusion_pairs(rings, self_cell_cutoff)
+        self.n_exclusions = len(pairs)
+        if len(pairs):
+            core = system._core
+            pid_pairs = np.ascontiguousarray(ids[pairs], dtype=np.int32)
+            if hasattr(core, "add_exclusions"):
+                core.add_exclusions(pid_pairs)
+            else:  # engine without the bulk call
+                for a, b in pid_pairs.tolist():
+                    core.add_exclusion(a, b)
+        self.set_rotation(list(rotation_ids))
+
+    # -- particles ----------------------------------------------------------------
+    @property
+    def particles(self):
+        """The cell's particles (lbmd ParticleSlice; .pos, .v, .f in bulk)."""
+        return self.mesh._parts
+
+    def get_n_nodes(self):
+        return self.mesh.get_n_nodes()
+
+    def get_n_triangles(self):
+        return self.mesh.get_n_triangles()
+
+    def get_n_edges(self):
+        return self.mesh.get_n_edges()
+
+    # -- position and motion ---------------------------------------------------
+    def get_origin(self):
+        """Mean node position (unfolded)."""
+        return self.mesh.positions().mean(axis=0)
+
+    def set_origin(self, new_origin=(0.0, 0.0, 0.0)):
+        """Move the cell rigidly so that its mean node position is new_origin."""
+        pos = self.mesh.positions()
+        self.particles.pos = pos - pos.mean(axis=0) + _vec3("OifCell.set_origin", "new_origin", new_origin)
+
+    def get_approx_origin(self):
+        """Mean of the six nodes extremal in x, y, z in the relaxed mesh (cheap centre)."""
+        return self.mesh.positions()[self.mesh.ids_extremal_points].mean(axis=0)
+
+    def get_origin_folded(self):
+        return np.mod(self.get_origin(), self.system.box_l)
+
+    def get_velocity(self):
+        return self.particles.v.mean(axis=0)
+
+    def set_velocity(self, new_velocity=(0.0, 0.0, 0.0)):
+        self.particles.v = _vec3("OifCell.set_velocity", "new_velocity", new_velocity)
+
+    def set_force(self, new_force=(0.0, 0.0, 0.0)):
+        """Constant external force on every node."""
+        self.particles.ext_force = _vec3("OifCell.set_force", "new_force", new_force)
+
+    def kill_motion(self):
+        self.particles.fix = [True, True, True]
+
+    def unkill_motion(self):
+        self.particles.fix = [False, False, False]
+
+    def pos_bounds(self):
+        """[x_min, x_max, y_min, y_max, z_min, z_max] of the nodes."""
+        pos = self.mesh.positions()
+        lo, hi = pos.min(axis=0), pos.max(axis=0)
+        return [float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), float(lo[2]), float(hi[2])]
+
+    # -- shape ------------------------------------------------------------------------
+    def surface(self):
+        return self.mesh.surface()
+
+    def volume(self):
+        return self.mesh.volume()
+
+    def diameter(self):
+        """Largest distance between two nodes."""
+        return geo.max_pair_distance(self.mesh.positions())
+
+    def min_edge_length(self):
+        return self.mesh.min_edge_length()
+
+    def max_edge_length(self):
+        return self.mesh.max_edge_length()
+
+    def aver_edge_length(self):
+        return self.mesh.aver_edge_length()
+
+    def stdev_edge_length(self):
+        return self.mesh.stdev_edge_length()
+
+    def print_mesh_analysis(self):
+        return self.mesh.print_analysis()
+
+    def total_fluid_force(self, lbfluid, friction):
+        return self.mesh.total_fluid_force(lbfluid, friction)
+
+    def suggest_LBgamma(self, visc=None, dens=None):
+        return self.cell_type.suggest_LBgamma(visc=visc, dens=dens)
+
+    # -- rotation tracking (PyOIF) ---------------------------------------------
+    def set_rotation(self, ids=()):
+        """Remember the current directions (from the centre) of nodes `ids`
+        (default: the six extremal nodes) for get_rotation_angles()."""
+        ids = list(ids)
+        n = self.get_n_nodes()
+        for i in ids:
+            if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n:
+                raise ValueError(f"OifCell.set_rotation: ids must be node ids in 0..{n - 1}, got {i!r}")
+        self.rot_ids = [int(i) for i in ids] if ids else list(self.mesh.ids_extremal_points)
+        pos = self.mesh.positions()
+        self.rot_init_pos = pos[self.rot_ids] - pos.mean(axis=0)
+
+    def get_rotation_positions(self):
+        pos = self.mesh.positions()
+        return pos[self.rot_ids] - pos.mean(axis=0)
+
+    def get_rotation_angles(self):
+        """Angle between each remembered node direction and its current one."""
+        cur = self.get_rotation_positions()
+        return [angle_btw_vectors(a, b) for a, b in zip(self.rot_init_pos, cur)]
+
+    # -- output -------------------------------------------------------------------
+    def _vtk_triangles(self):
+        # outward order so that ParaView's normals point out of the cell
+        return mesh_io.outward(self.mesh._analysis_triangles())
+
+    def output_vtk_pos(self, file_name=None, point_data=None):
+        """Legacy VTK polydata of the surface at unfolded positions;
+        point_data {name: N values or N x 3 vectors} adds per-node data
+        (e.g. {"force": cell.particles.f})."""
+        if file_name is None:
+            raise ValueError("OifCell.output_vtk_pos: parameter 'file_name' is required")
+        _vtk.write_triangles(file_name, self.mesh.positions(), self._vtk_triangles(), point_data)
+
+    def output_vtk_pos_folded(self, file_name=None, point_data=None):
+        """As output_vtk_pos, the whole cell shifted by box periods so that its
+        centre lies in the box (the cell is not cut at the box faces)."""
+        if file_name is None:
+            raise ValueError("OifCell.output_vtk_pos_folded: parameter 'file_name' is required")
+        pos = self.mesh.positions()
+        box = np.asarray(self.system.box_l)
+        shift = np.floor(pos.mean(axis=0) / box) * box
+        _vtk.write_triangles(file_name, pos - shift, self._vtk_triangles(), point_data)
+
+    def append_point_data_to_vtk(self, file_name=None, data_name=None, data=None, first_append=None):
+        """Append per-node scalars to a file written by output_vtk_pos* (PyOIF)."""
+        if file_name is None or data is None or data_name is None or first_append is None:
+            raise ValueError("OifCell.append_point_data_to_vtk: parameters 'file_name', 'data_name', "
+                             "'data' and 'first_append' are required")
+        data = np.asarray(data, dtype=float)
+        n = self.get_n_nodes()
+        if data.shape != (n,):
+            raise ValueError(f"OifCell.append_point_data_to_vtk: 'data' must have {n} values, got shape {data.shape}")
+        if not _vtk._is_writer():
+            return
+        with open(file_name, "a") as f:
+            if first_append:
+                f.write(f"POINT_DATA {n}\n")
+            f.write(f"SCALARS {data_name} double 1\nLOOKUP_TABLE default\n")
+            f.write("\n".join(repr(float(v)) for v in data) + "\n")
+
+    def output_raw_data(self, file_name=None, data=None):
+        if file_name is None or data is None:
+            raise ValueError("OifCell.output_raw_data: parameters 'file_name' and 'data' are required")
+        data = np.asarray(data, dtype=float)
+        if len(data) != self.get_n_nodes():
+            raise ValueError(f"OifCell.output_raw_data: 'data' must have {self.get_n_nodes()} rows, got {len(data)}")
+        if _vtk._is_writer():
+            np.savetxt(file_name, data.reshape(len(data), -1), fmt="%.15g")
+
+    def output_mesh_points(self, file_name=None):
+        """Node positions relative to the cell's centre, PyOIF's nodes.dat format
+        (a deformed shape to re-seed from with set_mesh_points, or to use as
+        a new cell type's nodes_file with the type's triangles)."""
+        if file_name is None:
+            raise ValueError("OifCell.output_mesh_points: parameter 'file_name' is required")
+        pos = self.mesh.positions()
+        if _vtk._is_writer():
+            mesh_io.write_nodes(file_name, pos - pos.mean(axis=0))
+
+    output_mesh_nodes = output_mesh_points
+
+    def set_mesh_points(self, file_name=None):
+        """Re-seed: put the nodes at the positions saved by output_mesh_points,
+        around the cell's current centre."""
+        if file_name is None:
+            raise ValueError("OifCell.set_mesh_points: parameter 'file_name' is required")
+        nodes, lines = mesh_io.read_nodes(file_name)
+        if len(nodes) != self.get_n_nodes():
+            raise ValueError(f"{file_name}: has {len(nodes)} nodes, the cell has {self.get_n_nodes()}")
+        self.particles.pos = nodes + self.get_origin()
+
+    set_mesh_nodes = set_mesh_points
+
+    def print_info(self):
+        print("\nThe following OifCell was created: ")
+        print("\t cell_id (mol_id): " + str(self.cell_id))
+        print("\t particle_mass: " + custom_str(self.particle_mass))
+        print("\t particle_type: " + str(self.particle_type))
+        print("\t rotate: " + str(None if self.rotate is None else self.rotate.tolist()))
+        print("\t origin: " + " ".join(str(x) for x in self.origin))
+        print("\t particle ids: " + f"{self.mesh.part_ids[0]}..{self.mesh.part_ids[-1]}")
+
+    # -- elastic forces ---------------------------------------------------------------
+    _FORCE_TERMS = (("stretching", "local"), ("bending", "local"), ("local_area", "local"),
+                    ("global_area", "global"), ("volume", "global"))
+
+    def elastic_force_arrays(self):
+        """dict term -> N x 3 forces on this cell's nodes from the engine, for
+        'stretching', 'bending', 'local_area', 'global_area', 'volume' (zeros
+        where the modulus is off) and 'total' (their sum)."""
+        ct = self.cell_type
+        ids = self.mesh.part_ids
+        n = len(ids)
+        out = {}
+        for term, which in self._FORCE_TERMS:
+            inter = ct.local_force_interaction if which == "local" else ct.global_force_interaction
+            f = np.zeros((n, 3))
+            if inter is not None:
+                bond_id = self.system.bonded_inter._id_of(inter)
+                fid, forces = self.system._core.oif_forces(bond_id, term)
+                fid = np.asarray(fid)
+                forces = np.asarray(forces).reshape(-1, 3)
+                index = {int(p): k for k, p in enumerate(fid)}
+                sel = np.array([index.get(int(p), -1) for p in ids])
+                have = sel >= 0
+                f[have] = forces[sel[have]]
+            out[term] = f
+        out["total"] = sum(out[t] for t, _ in self._FORCE_TERMS)
+        return out
+
+    def elastic_forces(self, el_forces=(0, 0, 0, 0, 0, 0), f_metric=(0, 0, 0, 0, 0, 0), vtk_file=None,
+                       raw_data_file=None):
+        """PyOIF's elastic-force analysis. Flags in the order (ks, kb, kal,
+        kag, kv, total): el_forces selects per-node force magnitudes to write
+        into vtk_file (as point data) or one force to write as raw x y z rows
+        into raw_data_file; f_metric selects sums over nodes of |F|, returned
+        as a list of 6 (0 if none selected)."""
+        for name, flags in (("el_forces", el_forces), ("f_metric", f_metric)):
+            if len(flags) != 6 or any(f not in (0, 1) for f in flags):
+                raise ValueError(f"OifCell.elastic_forces: '{name}' must be 6 flags of 0 or 1 in the "
+                                 f"order (ks, kb, kal, kag, kv, total), got {flags!r}")
+        names = ("stretching", "bending", "local_area", "global_area", "volume", "total")
+        if vtk_file is not None and sum(el_forces) == 0:
+            raise ValueError("OifCell.elastic_forces: vtk_file needs at least one flag set in el_forces")
+        if raw_data_file is not None and sum(el_forces) != 1:
+            raise ValueError("OifCell.elastic_forces: raw_data_file takes exactly one force: set one flag "
+                             "in el_forces")
+        if sum(el_forces) == 0 and sum(f_metric) == 0:
+            return 0
+        forces = self.elastic_force_arrays()
+        if vtk_file is not None:
+            labels = ("ks_f_metric", "kb_f_metric", "kal_f_metric", "kag_f_metric", "kav_f_metric",
+                      "total_f_metric")
+            data = {labels[i]: np.linalg.norm(forces[names[i]], axis=1) for i in range(6) if el_forces[i]}
+            self.output_vtk_pos_folded(vtk_file, point_data=data)
+        if raw_data_file is not None:
+            i = list(el_forces).index(1)
+            self.output_raw_data(raw_data_file, forces[names[i]])
+        if sum(f_metric) > 0:
+            return [float(np.linalg.norm(forces[names[i]], axis=1).sum()) if f_metric[i] else 0.0
+                    for i in range(6)]
+        return 0
