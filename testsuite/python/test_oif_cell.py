@@ -1,0 +1,288 @@
+"""OifCell placement and analysis: rotation/translation as PyOIF, volume,
+surface, diameter, centre, velocity, bounds, edge lengths, exclusions,
+VTK output read back with VTK, saving and re-seeding nodes, shape VTK."""
+import contextlib
+import io
+import os
+import tempfile
+import unittest
+
+import numpy as np
+
+import lbmd
+import oif
+from oif import mesh_io
+
+R_RBC = 3.91
+
+
+def pyoif_rotation(a, b, c):
+    """The rotation matrix written out as in PyOIF's Mesh.copy (angles about x, y, z)."""
+    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    return np.array([[cb * cc, sa * sb * cc - ca * sc, sc * sa + cc * sb * ca],
+                     [cb * sc, ca * cc + sa * sb * sc, sc * sb * ca - cc * sa],
+                     [-sb, cb * sa, ca * cb]])
+
+
+def read_vtk(path):
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    reader = vtk.vtkPolyDataReader()
+    reader.SetFileName(path)
+    reader.ReadAllScalarsOn()
+    reader.ReadAllVectorsOn()
+    reader.Update()
+    poly = reader.GetOutput()
+    pts = vtk_to_numpy(poly.GetPoints().GetData())
+    cells = []
+    polys = poly.GetPolys()
+    ids = vtk_to_numpy(polys.GetData()) if polys.GetNumberOfCells() else np.zeros(0, dtype=int)
+    k = 0
+    while k < len(ids):
+        cells.append(ids[k + 1:k + 1 + ids[k]].tolist())
+        k += ids[k] + 1
+    pd = poly.GetPointData()
+    data = {pd.GetArrayName(i): vtk_to_numpy(pd.GetArray(i)) for i in range(pd.GetNumberOfArrays())}
+    return pts, cells, data
+
+
+class TestOifCell(unittest.TestCase):
+
+    def setUp(self):
+        self.system = lbmd.System(box_l=[40.0, 30.0, 30.0])
+        self.system.time_step = 0.1
+        self.tmp = tempfile.TemporaryDirectory()
+        self.ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=self.system, resize=(R_RBC,) * 3)
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def path(self, name):
+        return os.path.join(self.tmp.name, name)
+
+    def test_placement_like_pyoif(self):
+        rot = (0.3, -1.1, 2.0)
+        origin = np.array([10.0, 12.0, 14.0])
+        cell = oif.OifCell(cell_type=self.ct, particle_type=3, origin=origin, rotate=rot, particle_mass=0.5)
+        nodes0 = np.loadtxt(oif.mesh_files("rbc374")[0]) * R_RBC
+        expected = nodes0 @ pyoif_rotation(*rot).T + origin
+        np.testing.assert_allclose(cell.mesh.positions(), expected, atol=1e-12)
+        p = cell.particles
+        np.testing.assert_array_equal(p.type, 3)
+        np.testing.assert_allclose(p.mass, 0.5)
+        np.testing.assert_array_equal(p.mol_id, cell.cell_id)
+        self.assertEqual(cell.get_n_nodes(), 374)
+        self.assertEqual(cell.get_n_triangles(), 744)
+        self.assertEqual(cell.get_n_edges(), 1116)
+        # rigid motion keeps volume, surface, edges, diameter (RBC diameter 2 R)
+        self.assertAlmostEqual(cell.volume(), self.ct.volume0, places=9)
+        self.assertAlmostEqual(cell.surface(), self.ct.surface0, places=9)
+        # diameter: exact largest node distance; the rim nodes lie within 0.5 % of r = R
+        pos = cell.mesh.positions()
+        brute = max(np.linalg.norm(pos - q, axis=1).max() for q in pos)
+        self.assertAlmostEqual(cell.diameter(), brute, places=12)
+        self.assertLessEqual(cell.diameter(), 2 * R_RBC + 1e-9)
+        self.assertGreater(cell.diameter(), 0.995 * 2 * R_RBC)
+        self.assertAlmostEqual(cell.aver_edge_length(), self.ct.mesh.aver_edge_length(), places=10)
+        self.assertAlmostEqual(cell.min_edge_length(), self.ct.mesh.min_edge_length(), places=10)
+        self.assertAlmostEqual(cell.max_edge_length(), self.ct.mesh.max_edge_length(), places=10)
+        np.testing.assert_allclose(cell.get_origin(), expected.mean(axis=0), atol=1e-12)
+        # approximate centre: mean of the nodes extremal in x, y, z of the relaxed mesh
+        ext = np.r_[nodes0.argmin(axis=0), nodes0.argmax(axis=0)]
+        np.testing.assert_allclose(cell.get_approx_origin(), expected[ext].mean(axis=0), atol=1e-12)
+        np.testing.assert_allclose(cell.get_approx_origin(), origin, atol=0.3 * R_RBC)
+        b = cell.pos_bounds()
+        np.testing.assert_allclose(b[0::2], expected.min(axis=0))
+        np.testing.assert_allclose(b[1::2], expected.max(axis=0))
+
+    def test_two_cells_distinct_ids_one_type(self):
+        c1 = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        c2 = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[30, 15, 15])
+        self.assertNotEqual(c1.cell_id, c2.cell_id)
+        self.assertEqual(self.system.max_oif_objects, 2)
+        self.assertEqual(len(set(c1.mesh.part_ids) & set(c2.mesh.part_ids)), 0)
+        self.assertEqual(len(self.system.part), 748)
+
+    def test_motion(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        cell.set_origin([20.0, 10.0, 5.0])
+        np.testing.assert_allclose(cell.get_origin(), [20, 10, 5], atol=1e-12)
+        self.assertAlmostEqual(cell.volume(), self.ct.volume0, places=9)
+        cell.set_velocity([0.1, -0.2, 0.3])
+        np.testing.assert_allclose(cell.get_velocity(), [0.1, -0.2, 0.3])
+        cell.particles.v = np.random.default_rng(1).normal(size=(374, 3))
+        np.testing.assert_allclose(cell.get_velocity(), cell.particles.v.mean(axis=0))
+        # folded origin: a cell moved by whole boxes folds back
+        cell.set_origin([20.0 + 2 * 40.0, 10.0 - 30.0, 5.0])
+        np.testing.assert_allclose(cell.get_origin_folded(), [20, 10, 5], atol=1e-9)
+
+    def test_rotation_angles(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[20, 15, 15])
+        np.testing.assert_allclose(cell.get_rotation_angles(), 0.0, atol=1e-6)
+        pos = cell.mesh.positions() - cell.get_origin()
+        rot = pyoif_rotation(0.0, 0.0, 0.4)
+        cell.particles.pos = pos @ rot.T + cell.get_origin()
+        ang = np.array(cell.get_rotation_angles())
+        ref = [oif.oif_utils.angle_btw_vectors(pos[i], rot @ pos[i]) for i in cell.rot_ids]
+        np.testing.assert_allclose(ang, ref, atol=1e-9)
+        # the x and y extremal nodes lie near the rotation plane: turned by about 0.4
+        np.testing.assert_allclose(ang[:4], 0.4, atol=2e-3)
+
+    def test_exclusion_rings(self):
+        """Excluded pairs are those at most k edges apart (checked against a
+        plain breadth-first search)."""
+        m = self.ct.mesh
+        nb = [set() for _ in range(m.get_n_nodes())]
+        for a, b in m.edge_ids.tolist():
+            nb[a].add(b)
+            nb[b].add(a)
+        for k in (1, 2, 3):
+            expected = set()
+            for s in range(m.get_n_nodes()):
+                dist = {s: 0}
+                front = [s]
+                for d in range(k):
+                    front = [y for x in front for y in nb[x] if y not in dist]
+                    for y in front:
+                        dist[y] = d + 1
+                expected |= {(s, t) for t in dist if t > s}
+            got = {tuple(p) for p in self.ct.exclusion_pairs(k).tolist()}
+            self.assertEqual(got, expected)
+        self.assertEqual(len(self.ct.exclusion_pairs(1)), m.get_n_edges())
+        cut = 0.5 * R_RBC
+        pairs = self.ct.exclusion_pairs(0, distance=cut)
+        d = np.linalg.norm(m.positions()[pairs[:, 0]] - m.positions()[pairs[:, 1]], axis=1)
+        self.assertTrue(np.all(d < cut))
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[20, 15, 15], exclusion_neighbours=1)
+        self.assertEqual(cell.n_exclusions, m.get_n_edges())
+
+    def test_vtk_output_reads_back(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[20, 15, 15], rotate=(0.1, 0.2, 0.3))
+        forces = np.random.default_rng(2).normal(size=(374, 3))
+        cell.output_vtk_pos(self.path("cell.vtk"), point_data={"force": forces, "fx": forces[:, 0]})
+        pts, cells, data = read_vtk(self.path("cell.vtk"))
+        np.testing.assert_allclose(pts, cell.mesh.positions(), atol=1e-12)
+        self.assertEqual(len(cells), 744)
+        tris = np.array(cells)
+        # written with outward normals (ParaView shading): positive oriented volume
+        self.assertAlmostEqual(mesh_io.signed_volume(pts, tris), self.ct.volume0, places=6)
+        np.testing.assert_allclose(data["force"], forces)
+        np.testing.assert_allclose(data["fx"], forces[:, 0])
+        # folded: moved by box periods, written back inside the box
+        cell.set_origin([20 + 40.0, 15 - 30.0, 15 + 60.0])
+        cell.output_vtk_pos_folded(self.path("folded.vtk"))
+        pts, _, _ = read_vtk(self.path("folded.vtk"))
+        np.testing.assert_allclose(pts.mean(axis=0), [20, 15, 15], atol=1e-9)
+        # PyOIF's append_point_data_to_vtk on top
+        cell.append_point_data_to_vtk(self.path("folded.vtk"), "ids", np.arange(374.0), first_append=True)
+        _, _, data = read_vtk(self.path("folded.vtk"))
+        np.testing.assert_allclose(data["ids"], np.arange(374.0))
+        with self.assertRaisesRegex(ValueError, "point data 'bad'"):
+            cell.output_vtk_pos(self.path("x.vtk"), point_data={"bad": np.zeros(3)})
+
+    def test_save_and_reseed(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        rng = np.random.default_rng(3)
+        deformed = cell.mesh.positions() * [1.2, 0.9, 1.0] + rng.normal(scale=0.05, size=(374, 3))
+        cell.particles.pos = deformed
+        cell.output_mesh_nodes(self.path("saved_nodes.dat"))
+        new = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[30, 15, 15])
+        new.set_mesh_points(self.path("saved_nodes.dat"))
+        np.testing.assert_allclose(new.mesh.positions() - new.get_origin(),
+                                   deformed - deformed.mean(axis=0), atol=1e-12)
+        np.testing.assert_allclose(new.get_origin(), [30, 15, 15] + self.ct.mesh.positions().mean(axis=0),
+                                   atol=1e-12)
+        self.assertAlmostEqual(new.volume(), cell.volume(), places=9)
+        # the saved shape as a new cell type (relaxed state = that shape)
+        ct2 = oif.OifCellType(self.path("saved_nodes.dat"), oif.mesh_files("rbc374")[1], system=self.system)
+        self.assertAlmostEqual(ct2.volume0, cell.volume(), places=9)
+        with self.assertRaisesRegex(ValueError, "has 6 nodes"):
+            np.savetxt(self.path("few.dat"), np.zeros((6, 3)))
+            new.set_mesh_points(self.path("few.dat"))
+
+    def test_print_info_and_gamma(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            self.ct.print_info()
+            cell.print_info()
+            cell.print_mesh_analysis()
+        self.assertIn("n_nodes: 374", out.getvalue())
+        self.assertIn("cell_id (mol_id): 0", out.getvalue())
+        # calibration point of PyOIF's formula: 393 nodes, surface 201.06, visc 1.5, dens 1.025 -> 1.82
+        shared = os.environ.get("PYOIF_SHARED_DATA", "/work/shared/data")
+        sphere = oif.OifCellType(os.path.join(shared, "meshes", "sphere393nodes.dat"),
+                                 os.path.join(shared, "meshes", "sphere393triangles.dat"), system=self.system)
+        g = sphere.suggest_LBgamma(visc=1.5, dens=1.025)
+        self.assertAlmostEqual(g, 1.82 * np.sqrt(sphere.surface0 / 201.0619), places=12)
+        # finer mesh: friction per node scales with 1/n
+        self.assertAlmostEqual(cell.suggest_LBgamma(visc=1.5, dens=1.025),
+                               1.82 * 393 / 374 * np.sqrt(self.ct.surface0 / 201.0619), places=12)
+
+    def test_bad_arguments(self):
+        with self.assertRaisesRegex(TypeError, "cell_type"):
+            oif.OifCell(cell_type=None, particle_type=0, origin=[1, 2, 3])
+        with self.assertRaisesRegex(ValueError, "origin"):
+            oif.OifCell(cell_type=self.ct, particle_type=0, origin=[1, 2])
+        with self.assertRaisesRegex(TypeError, "particle_type"):
+            oif.OifCell(cell_type=self.ct, particle_type=-1, origin=[1, 2, 3])
+        with self.assertRaisesRegex(ValueError, "particle_mass"):
+            oif.OifCell(cell_type=self.ct, particle_type=0, origin=[1, 2, 3], particle_mass=0.0)
+        with self.assertRaisesRegex(ValueError, "either 'ks'"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, ks=0.1, kslin=0.1)
+        with self.assertRaisesRegex(ValueError, "'kb' must be >= 0"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, kb=-1.0)
+        with self.assertRaisesRegex(ValueError, "'resize'"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, resize=(1.0, 0.0, 1.0))
+        with self.assertRaisesRegex(TypeError, "system"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=None)
+        with self.assertRaisesRegex(ValueError, "no shipped mesh 'rbc9'"):
+            oif.mesh_files("rbc9")
+
+    def test_pyoif_views(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        m = cell.mesh
+        self.assertEqual(len(m.points), 374)
+        p = m.points[7]
+        np.testing.assert_allclose(p.get_pos(), m.positions()[7])
+        self.assertEqual(p.part_id, m.part_ids[7])
+        t = m.triangles[5]
+        self.assertAlmostEqual(t.area(), oif.oif_utils.area_triangle(*m.positions()[m.triangle_ids[5]]))
+        a = m.angles[11]
+        self.assertAlmostEqual(a.size(), self.ct.phi0[11], places=10)
+        e = m.edges[3]
+        self.assertAlmostEqual(e.length(), self.ct.mesh.edges[3].length(), places=10)
+        # a PyOIF script may restrict the triangles to analyse
+        m.triangles = m.triangles[:20]
+        self.assertAlmostEqual(cell.surface(), sum(t.area() for t in m.triangles[:20]), places=10)
+
+    @unittest.skipUnless(hasattr(lbmd.shapes, "Rhomboid") and hasattr(lbmd.shapes, "Cylinder"),
+                         "lbmd.shapes.Rhomboid/Cylinder not built yet")
+    def test_shape_vtk(self):
+        from lbmd import shapes
+        rh = shapes.Rhomboid(corner=[1, 2, 3], a=[4, 0, 0], b=[0, 5, 0], c=[0, 0, 6], direction=1)
+        oif.output_vtk_rhomboid(rh, out_file=self.path("rh.vtk"))
+        pts, cells, _ = read_vtk(self.path("rh.vtk"))
+        np.testing.assert_allclose(pts.min(axis=0), [1, 2, 3])
+        np.testing.assert_allclose(pts.max(axis=0), [5, 7, 9])
+        self.assertEqual(len(cells), 6)
+        cyl = shapes.Cylinder(center=[5, 5, 5], axis=[1, 1, 0], radius=2.0, length=4.0, direction=1)
+        oif.output_vtk_cylinder(cyl, n=24, out_file=self.path("cyl.vtk"))
+        pts, cells, _ = read_vtk(self.path("cyl.vtk"))
+        axis = np.array([1, 1, 0]) / np.sqrt(2)
+        rel = pts - [5, 5, 5]
+        along = rel @ axis
+        np.testing.assert_allclose(np.abs(along), 2.0, atol=1e-12)
+        np.testing.assert_allclose(np.linalg.norm(rel - along[:, None] * axis, axis=1), 2.0, atol=1e-12)
+        self.assertEqual(len(cells), 26)
+        oif.output_vtk_pore(axis=[1, 0, 0], length=4.0, outer_rad_left=6.0, outer_rad_right=6.0,
+                            pos=[10, 10, 10], rad_left=2.0, rad_right=3.0, smoothing_radius=1.0, m=5,
+                            out_file=self.path("pore.vtk"))
+        pts, cells, _ = read_vtk(self.path("pore.vtk"))
+        r = np.hypot(pts[:, 1] - 10, pts[:, 2] - 10)
+        self.assertAlmostEqual(r.min(), 2.0)
+        self.assertAlmostEqual(r.max(), 6.0)
+
+
+if __name__ == "__main__":
+    unittest.main()
