@@ -138,12 +138,11 @@ void CellSystem::build_pairs(const ParticleStore& p, double range) {
 
   const double range2 = range * range;
   auto consider = [&](int a, int b) {
-    const bool a_local = static_cast<std::size_t>(a) < n_local;
+    if (static_cast<std::size_t>(a) >= n_local)
+      std::swap(a, b);  // a is local from here on (if either is)
+    if (static_cast<std::size_t>(a) >= n_local)
+      return;  // ghost-ghost pairs belong to other owners
     const bool b_local = static_cast<std::size_t>(b) < n_local;
-    if (!a_local && !b_local)
-      return;
-    if (!a_local)
-      std::swap(a, b);  // a is local from here on
     if ((p.position(a) - p.position(b)).squaredNorm() >= range2)
       return;
     const int id_a = p.id[a];

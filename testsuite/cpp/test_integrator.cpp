@@ -1,0 +1,138 @@
+// Velocity Verlet: NVE energy conservation with soft-sphere + harmonic-bond
+// forces (error bounded and scaling as time_step^2), momentum conservation to
+// round-off, bonds across the periodic boundary.
+#include "system/system.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace pyoif;
+
+namespace {
+
+/** A periodic box of bonded chains with soft-sphere repulsion between all
+ *  particles, random thermal velocities with zero total momentum. */
+System make_chains(double dt) {
+  System s({8, 8, 8}, {true, true, true});
+  s.set_time_step(dt);
+  s.cells.skin = 0.3;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  int pid = 0;
+  Vec3 momentum = Vec3::Zero();
+  // 6x6 chains of 6 particles along z, spacing 1.3 (inside the soft-sphere range)
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      for (int k = 0; k < 6; ++k) {
+        const Vec3 x(0.4 + 1.3 * i + u(rng), 0.4 + 1.3 * j + u(rng), 0.4 + 1.3 * k + u(rng));
+        const Vec3 v(g(rng), g(rng), g(rng));
+        const double m = 1.0 + 0.5 * (pid % 3);
+        momentum += m * v;
+        s.add_particle(pid++, x, v, m, 0, i * 6 + j, Vec3::Zero(), 0);
+      }
+  const double total_mass = [&] {
+    double M = 0;
+    for (double m : s.particles.mass)
+      M += m;
+    return M;
+  }();
+  for (std::size_t i = 0; i < s.particles.n_local(); ++i)
+    s.particles.vel[i] -= momentum / total_mass;
+  // soft sphere with a cutoff where the potential is negligible (V(rc) = 2.4e-7,
+  // so crossing the cutoff does not spoil energy conservation)
+  s.nonbonded.at(0, 0).get<SoftSphere>() = {0.2, 12.0, 2.5, 0.0};
+  s.nonbonded.commit(0, 0);
+  const int bond = s.add_bonded_interaction(HarmonicBond{20.0, 1.3, 0.0});
+  std::vector<int> ids;
+  for (int c = 0; c < 36; ++c)
+    for (int k = 0; k + 1 < 6; ++k) {
+      ids.push_back(c * 6 + k);
+      ids.push_back(c * 6 + k + 1);
+    }
+  s.add_bonds(bond, ids, {});
+  return s;
+}
+
+/** Largest |E(t) - E(0)| / E_kin(0) over a fixed physical time. */
+double max_energy_error(double dt, double duration, double* drift = nullptr) {
+  System s = make_chains(dt);
+  const double e0 = s.compute_energies().total();
+  const double ekin0 = s.compute_energies().kinetic;
+  const int n_chunks = 100;
+  const int steps = static_cast<int>(std::lround(duration / dt / n_chunks));
+  double worst = 0.0;
+  double e_last = e0;
+  for (int c = 0; c < n_chunks; ++c) {
+    s.integrate(steps);
+    e_last = s.compute_energies().total();
+    worst = std::max(worst, std::abs(e_last - e0) / ekin0);
+  }
+  if (drift)
+    *drift = (e_last - e0) / ekin0;
+  return worst;
+}
+
+}  // namespace
+
+TEST(VelocityVerlet, EnergyErrorBoundedAndScalesAsTimeStepSquared) {
+  // 10^4 steps at dt = 0.002; the same physical time at dt/2 and dt/4.
+  const double duration = 1e4 * 0.002;
+  double drift = 0.0;
+  const double err1 = max_energy_error(0.002, duration, &drift);
+  const double err2 = max_energy_error(0.001, duration);
+  const double err4 = max_energy_error(0.0005, duration);
+  // Bound: the energy error stays below 1e-3 of the initial kinetic energy
+  // and there is no secular drift beyond that.
+  EXPECT_LT(err1, 1e-3);
+  EXPECT_LT(std::abs(drift), 1e-3);
+  // Second order: halving dt divides the error by 4 (accept 3..5).
+  EXPECT_GT(err1 / err2, 3.0) << err1 << " " << err2;
+  EXPECT_LT(err1 / err2, 5.0) << err1 << " " << err2;
+  EXPECT_GT(err2 / err4, 3.0) << err2 << " " << err4;
+  EXPECT_LT(err2 / err4, 5.0) << err2 << " " << err4;
+}
+
+TEST(VelocityVerlet, MomentumConservedToRoundOff) {
+  System s = make_chains(0.002);
+  const Vec3 p0 = s.particle_momentum();
+  s.integrate(5000);
+  const Vec3 p1 = s.particle_momentum();
+  // |p| of one particle is O(1); round-off accumulates over 5000 steps of
+  // 216 particles: allow 1e-11.
+  EXPECT_LT((p1 - p0).norm(), 1e-11) << (p1 - p0).transpose();
+  EXPECT_GT(s.cells.n_rebuilds(), 2u) << "particles must have crossed cells and the boundary";
+}
+
+TEST(PeriodicImages, BondAcrossTheBoundary) {
+  System s({10, 10, 10}, {true, true, true});
+  s.add_particle(0, {0.1, 5, 5}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
+  s.add_particle(1, {9.9, 5, 5}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
+  const int bond = s.add_bonded_interaction(HarmonicBond{3.0, 0.5, 1.0});
+  s.add_bonds(bond, {0, 1}, {});
+  s.compute_forces();
+  // minimum-image distance 0.2: compressed by 0.3, particle 0 pushed to +x
+  EXPECT_NEAR(s.particles.force[0][0], 3.0 * 0.3, 1e-12);
+  EXPECT_NEAR(s.particles.force[1][0], -3.0 * 0.3, 1e-12);
+  EXPECT_NEAR(s.particles.force[0][1], 0.0, 1e-15);
+}
+
+TEST(PeriodicImages, PairForceThroughGhostsAndUnfoldedTrajectory) {
+  System s({6, 6, 6}, {true, true, true});
+  s.set_time_step(0.01);
+  s.add_particle(0, {0.2, 3, 3}, {-1.0, 0, 0}, 1.0, 0, 0, Vec3::Zero(), 0);
+  s.add_particle(1, {5.3, 3, 3}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
+  s.nonbonded.at(0, 0).get<SoftSphere>() = {1.0, 2.0, 1.5, 0.0};
+  s.nonbonded.commit(0, 0);
+  s.compute_forces();
+  // distance through the boundary 0.9: force n a r^-(n+1) = 2 / 0.9^3
+  EXPECT_NEAR(s.particles.force[0][0], 2.0 / std::pow(0.9, 3), 1e-12);
+  EXPECT_NEAR(s.particles.force[1][0], -2.0 / std::pow(0.9, 3), 1e-12);
+  s.integrate(100);
+  // particle 0 bounced back: momentum conserved, positions folded into the box
+  EXPECT_NEAR(s.particle_momentum()[0], -1.0, 1e-12);
+  for (std::size_t i = 0; i < 2; ++i)
+    EXPECT_TRUE(s.particles.pos[i][0] > -0.5 && s.particles.pos[i][0] < 6.5);
+}
