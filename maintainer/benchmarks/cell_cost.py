@@ -1,0 +1,121 @@
+#!/usr/bin/env pyoif
+"""Cost of OIF cells: the extra seconds per 1000 MD steps that one 374-node
+RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
+0 / 5 / 20 / 60 cells on one core, and the time to create one cell.
+
+    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--steps 300] [--cells 0 5 20 60]
+        [--csv cell_cost.csv] [--no-fluid]
+
+Scene (as the ESPResSo 4.2.2 timing in reference/model.md): channel
+100 x 40 x 20 (agrid 1, tau = time step = 0.1, visc 1.5, dens 1) between two
+walls, RBCs rbc374 scaled by 4 with ks 0.005, kb 0.02, kal 0.007, kag 0.7,
+kv 0.9, coupling gamma 1.5, node-wall soft sphere and cell-cell membrane
+collision (normals on), cells seeded at random without overlaps.
+Paper (PyOIF on ESPResSo, Threadripper, 1 core): 1.5-3.2 s extra per cell
+per 1000 steps; ESPResSo 4.2.2 on this machine kind: 0.77-1.59 ms per step
+per cell (5-20 cells). Target: <= 0.1 s per cell per 1000 steps.
+
+The same scene without fluid (--no-fluid: Langevin thermostat instead of
+LB) isolates the membrane and contact cost. For where the time goes, run
+under perf, e.g.
+    perf record -g -o cell_cost.perf -- build/pyoif maintainer/benchmarks/cell_cost.py --cells 20 --steps 500
+    perf report -i cell_cost.perf --no-children --percent-limit 2
+"""
+import argparse
+import csv
+import os
+import time
+
+import numpy as np
+
+import lbmd
+import oif
+from lbmd import lb, lbboundaries, shapes
+
+BOX = (100.0, 40.0, 20.0)
+MODULI = dict(ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
+
+
+def build(n_cells, fluid, seed=1):
+    system = lbmd.System(box_l=BOX)
+    system.time_step = 0.1
+    system.cell_system.skin = 0.3
+    walls = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(BOX[2] - 1.0))]
+    rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(4.0, 4.0, 4.0), normal=True,
+                          **MODULI)
+    if n_cells:
+        oif.seed_cells(system, rbc, counts=n_cells, boundaries=walls, seed=seed, particle_types=0)
+    for w in walls:
+        system.constraints.add(shape=w, particle_type=10, penetrable=False)
+    system.non_bonded_inter[0, 10].soft_sphere.set_params(a=0.0001, n=1.2, cutoff=0.5, offset=0.0)
+    system.non_bonded_inter[0, 0].membrane_collision.set_params(a=0.0001, n=1.2, cutoff=0.5, offset=0.0)
+    if fluid:
+        lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[1e-4, 0, 0], n_threads=1)
+        system.actors.add(lbf)
+        for w in walls:
+            system.lbboundaries.add(lbboundaries.LBBoundary(shape=w))
+        system.thermostat.set_lb(LB_fluid=lbf, gamma=1.5)
+    else:
+        system.thermostat.set_langevin(kT=0.0, gamma=0.1)
+    return system, rbc
+
+
+def time_run(system, steps, repeats):
+    system.integrator.run(20)  # warm up: neighbour lists, caches
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        system.integrator.run(steps)
+        best = min(best, time.perf_counter() - t)
+    return best * 1000.0 / steps  # seconds per 1000 steps
+
+
+def creation_time(repeats=20):
+    system = lbmd.System(box_l=[400.0, 400.0, 400.0])
+    system.time_step = 0.1
+    rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(4.0, 4.0, 4.0), normal=True,
+                          **MODULI)
+    oif.OifCell(cell_type=rbc, particle_type=0, origin=[5.0, 5.0, 5.0])  # first: imports, caches
+    times = []
+    for i in range(repeats):
+        t = time.perf_counter()
+        oif.OifCell(cell_type=rbc, particle_type=0, origin=[20.0 + 12 * (i % 30), 20.0 + 12 * (i // 30), 20.0])
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--steps", type=int, default=300, help="timed MD steps per configuration")
+    ap.add_argument("--repeats", type=int, default=2, help="timed runs per configuration (best counts)")
+    ap.add_argument("--cells", type=int, nargs="+", default=[0, 5, 20, 60])
+    ap.add_argument("--no-fluid", action="store_true", help="Langevin instead of LB (membrane cost alone)")
+    ap.add_argument("--csv", default="cell_cost.csv")
+    args = ap.parse_args()
+    if os.environ.get("OMP_NUM_THREADS") != "1":
+        print("note: set OMP_NUM_THREADS=1 for the one-core figure")
+    t_create = creation_time()
+    print(f"creating one 374-node cell with all bonds and exclusions: {1e3 * t_create:.2f} ms (median)")
+    rows = []
+    base = None
+    for n in args.cells:
+        system, _ = build(n, fluid=not args.no_fluid)
+        s1000 = time_run(system, args.steps, args.repeats)
+        if n == 0:
+            base = s1000
+        extra = (s1000 - base) / n if (n and base is not None) else float("nan")
+        rows.append({"cells": n, "fluid": not args.no_fluid, "s_per_1000_steps": s1000,
+                     "extra_s_per_cell_per_1000_steps": extra})
+        print(f"{n:3d} cells: {s1000:8.3f} s / 1000 steps"
+              + (f", extra per cell {extra:.4f} s / 1000 steps ({extra:.4f} ms per step)" if n else ""))
+    rows.append({"cells": "create_one_cell_s", "fluid": "", "s_per_1000_steps": t_create,
+                 "extra_s_per_cell_per_1000_steps": ""})
+    with open(args.csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    print(f"written {args.csv}")
+
+
+if __name__ == "__main__":
+    main()
