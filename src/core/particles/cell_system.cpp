@@ -13,9 +13,11 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
   bool moved = !m_valid || m_pos_at_rebuild.size() != p.n_local();
   for (std::size_t i = 0; i < p.n_local(); ++i) {
     const Vec3& x = p.pos[i];
-    if (!std::isfinite(x[0] + x[1] + x[2])) {
+    // Beyond 1e9 box lengths a particle has certainly blown up (and folding
+    // would overflow the image counter).
+    if (!std::isfinite(x[0] + x[1] + x[2]) || x.cwiseAbs().maxCoeff() > m_blowup_distance) {
       std::ostringstream msg;
-      msg << "particle " << p.id[i] << " has a non-finite position (" << x.transpose()
+      msg << "particle " << p.id[i] << " has a non-finite or runaway position (" << x.transpose()
           << ") at time " << time << "; force " << p.force[i].transpose()
           << ". Reduce the time step or check the interaction parameters.";
       throw SimulationInstability(msg.str());
@@ -27,6 +29,7 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
 }
 
 void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut) {
+  m_blowup_distance = 1e9 * box.length().maxCoeff();
   for (std::size_t i = 0; i < p.n_local(); ++i)
     box.fold(p.pos[i], p.image[i]);
   m_pos_at_rebuild = p.pos;

@@ -67,6 +67,7 @@ private:
 
   bool m_valid = false;
   double m_range = 0.0;
+  double m_blowup_distance = 1e300;
   std::size_t m_n_rebuilds = 0;
   std::vector<Vec3> m_pos_at_rebuild;
   std::vector<std::array<int, 2>> m_pairs;
