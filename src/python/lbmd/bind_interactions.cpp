@@ -22,15 +22,19 @@ template <class Model> void bind_pair_model(py::class_<System, std::shared_ptr<S
     s.nonbonded.commit(t1, t2);
     s.on_interactions_changed();
   });
-  sys.def(("get_" + name).c_str(), [](System& s, int t1, int t2) {
-    return s.nonbonded.at(t1, t2).template get<Model>();
-  });
+  sys.def(("get_" + name).c_str(),
+          [](System& s, int t1, int t2) { return s.nonbonded.at(t1, t2).template get<Model>(); });
 }
+
+template <class IA, class = void> struct has_reference_check : std::false_type {};
+template <class IA>
+struct has_reference_check<IA, std::void_t<decltype(IA::check_reference(nullptr, 0))>>
+    : std::true_type {};
 
 using IdArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-}  // namespace
+} // namespace
 
 void bind_interactions(py::module_& m) {
   auto sys = py::reinterpret_borrow<py::class_<System, std::shared_ptr<System>>>(m.attr("System"));
@@ -47,13 +51,54 @@ void bind_interactions(py::module_& m) {
       .def_readonly("offset", &SoftSphere::Params::offset);
   bind_pair_model<SoftSphere>(sys);
 
+  py::class_<MembraneCollision::Params>(m, "MembraneCollisionParams")
+      .def(py::init([](double a, double n, double cutoff, double offset) {
+             return MembraneCollision::Params{a, n, cutoff, offset};
+           }),
+           py::arg("a"), py::arg("n"), py::arg("cutoff"), py::arg("offset"))
+      .def_readonly("a", &MembraneCollision::Params::a)
+      .def_readonly("n", &MembraneCollision::Params::n)
+      .def_readonly("cutoff", &MembraneCollision::Params::cutoff)
+      .def_readonly("offset", &MembraneCollision::Params::offset);
+  bind_pair_model<MembraneCollision>(sys);
+
   // ---- bonded interactions --------------------------------------------------
   py::class_<HarmonicBond>(m, "HarmonicBond")
-      .def(py::init([](double k, double r_0, double r_cut) { return HarmonicBond{k, r_0, r_cut}; }),
+      .def(py::init([](double k, double r_0, double r_cut) {
+             return HarmonicBond{k, r_0, r_cut};
+           }),
            py::arg("k"), py::arg("r_0"), py::arg("r_cut"))
       .def_readonly("k", &HarmonicBond::k)
       .def_readonly("r_0", &HarmonicBond::r_0)
       .def_readonly("r_cut", &HarmonicBond::r_cut);
+
+  // OIF membrane bonds (the per-bond reference values r0, phi0, A01, A02 of
+  // OifLocalForces travel with the bonds, not with the interaction)
+  py::class_<OifLocalForces>(m, "OifLocalForces")
+      .def(py::init([](double ks, double kslin, double kb, double kal, double kvisc) {
+             return OifLocalForces{ks, kslin, kb, kal, kvisc};
+           }),
+           py::arg("ks"), py::arg("kslin"), py::arg("kb"), py::arg("kal"), py::arg("kvisc"))
+      .def_readonly("ks", &OifLocalForces::ks)
+      .def_readonly("kslin", &OifLocalForces::kslin)
+      .def_readonly("kb", &OifLocalForces::kb)
+      .def_readonly("kal", &OifLocalForces::kal)
+      .def_readonly("kvisc", &OifLocalForces::kvisc);
+  py::class_<OifGlobalForces>(m, "OifGlobalForces")
+      .def(py::init([](double A0_g, double ka_g, double V0, double kv) {
+             OifGlobalForces g;
+             g.A0_g = A0_g;
+             g.ka_g = ka_g;
+             g.V0 = V0;
+             g.kv = kv;
+             return g;
+           }),
+           py::arg("A0_g"), py::arg("ka_g"), py::arg("V0"), py::arg("kv"))
+      .def_readonly("A0_g", &OifGlobalForces::A0_g)
+      .def_readonly("ka_g", &OifGlobalForces::ka_g)
+      .def_readonly("V0", &OifGlobalForces::V0)
+      .def_readonly("kv", &OifGlobalForces::kv);
+  py::class_<OifOutDirection>(m, "OifOutDirection").def(py::init<>());
 
   sys.def("add_bonded_interaction", &System::add_bonded_interaction)
       .def("n_bonded_interactions", [](const System& s) { return s.bonded.size(); })
@@ -61,30 +106,38 @@ void bind_interactions(py::module_& m) {
            [](System& s, int bond_id, const IdArray& ids, const RealArray& per_bond) {
              std::vector<int> i(ids.data(), ids.data() + ids.size());
              std::vector<double> r(per_bond.data(), per_bond.data() + per_bond.size());
+             if (bond_id >= 0 && bond_id < static_cast<int>(s.bonded.size()))
+               std::visit(
+                   [&](const auto& ia) {
+                     using IA = std::decay_t<decltype(ia)>;
+                     if constexpr (IA::per_bond_stride > 0 && has_reference_check<IA>::value)
+                       for (std::size_t b = 0; b < r.size() / IA::per_bond_stride; ++b)
+                         IA::check_reference(r.data() + b * IA::per_bond_stride, b);
+                   },
+                   s.bonded[bond_id].interaction);
              s.add_bonds(bond_id, i, r);
            })
       .def("get_bonds",
            [](const System& s, int bond_id) {
              const BondGroup& g = s.bonded.at(bond_id).bonds;
-             IdArray out({static_cast<py::ssize_t>(g.size()), static_cast<py::ssize_t>(g.n_particles)});
+             IdArray out(
+                 {static_cast<py::ssize_t>(g.size()), static_cast<py::ssize_t>(g.n_particles)});
              std::copy(g.ids.begin(), g.ids.end(), out.mutable_data());
              return out;
            })
-      .def("remove_bond",
-           [](System& s, int bond_id, const std::vector<int>& ids) {
-             BondGroup& g = s.bonded.at(bond_id).bonds;
-             for (std::size_t b = 0; b < g.size(); ++b)
-               if (std::equal(ids.begin(), ids.end(), g.bond(b))) {
-                 g.ids.erase(g.ids.begin() + b * g.n_particles,
-                             g.ids.begin() + (b + 1) * g.n_particles);
-                 if (g.per_bond_stride)
-                   g.per_bond.erase(g.per_bond.begin() + b * g.per_bond_stride,
-                                    g.per_bond.begin() + (b + 1) * g.per_bond_stride);
-                 s.compute_forces();
-                 return true;
-               }
-             return false;
-           });
+      .def("remove_bond", [](System& s, int bond_id, const std::vector<int>& ids) {
+        BondGroup& g = s.bonded.at(bond_id).bonds;
+        for (std::size_t b = 0; b < g.size(); ++b)
+          if (std::equal(ids.begin(), ids.end(), g.bond(b))) {
+            g.ids.erase(g.ids.begin() + b * g.n_particles, g.ids.begin() + (b + 1) * g.n_particles);
+            if (g.per_bond_stride)
+              g.per_bond.erase(g.per_bond.begin() + b * g.per_bond_stride,
+                               g.per_bond.begin() + (b + 1) * g.per_bond_stride);
+            s.compute_forces();
+            return true;
+          }
+        return false;
+      });
 
   // ---- shapes (base) and constraints ----------------------------------------
   py::class_<shapes::Shape, std::shared_ptr<shapes::Shape>>(m, "Shape")
@@ -98,8 +151,7 @@ void bind_interactions(py::module_& m) {
       .def("is_inside", &shapes::Shape::is_inside)
       .def_property_readonly("name", &shapes::Shape::name);
 
-  py::class_<ShapeBasedConstraint, std::shared_ptr<ShapeBasedConstraint>>(m,
-                                                                         "ShapeBasedConstraint")
+  py::class_<ShapeBasedConstraint, std::shared_ptr<ShapeBasedConstraint>>(m, "ShapeBasedConstraint")
       .def(py::init([](std::shared_ptr<shapes::Shape> shape, int particle_type, bool penetrable,
                        bool only_positive) {
         auto c = std::make_shared<ShapeBasedConstraint>();
@@ -125,4 +177,4 @@ void bind_interactions(py::module_& m) {
       });
 }
 
-}  // namespace pyoif::python
+} // namespace pyoif::python

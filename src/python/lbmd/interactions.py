@@ -60,8 +60,25 @@ class SoftSphereInteraction(NonBondedModel):
     _core_params = staticmethod(_lbmd.SoftSphereParams)
 
 
+class MembraneCollisionInteraction(NonBondedModel):
+    """Membrane collision between nodes of different cells (model eq. 9):
+    V(d) = a / (1 + exp(n d)), d = r - offset, for r < cutoff + offset.
+
+    Acts only between particles of different mol_id (cells) and needs the
+    nodes' outward normals (OifOutDirection bonds); the normals decide whether
+    the membranes have crossed, and then the force pulls the node back."""
+
+    name = "membrane_collision"
+    _params = [Param("a", "float", check=non_negative, doc="energy scale"),
+               Param("n", "float", check=positive, doc="steepness (1/length)"),
+               Param("cutoff", "float", check=non_negative, doc="range beyond offset"),
+               Param("offset", "float", 0.0, check=non_negative, doc="distance shift")]
+    _core_params = staticmethod(_lbmd.MembraneCollisionParams)
+
+
 #: name -> class of every non-bonded model, as attributes of a type pair
-NONBONDED_MODELS = {SoftSphereInteraction.name: SoftSphereInteraction}
+NONBONDED_MODELS = {SoftSphereInteraction.name: SoftSphereInteraction,
+                    MembraneCollisionInteraction.name: MembraneCollisionInteraction}
 
 
 def register_nonbonded_model(cls):
@@ -130,6 +147,83 @@ class HarmonicBond(BondedInteraction):
                Param("r_cut", "float", 0.0, check=non_negative)]
     _core_class = _lbmd.HarmonicBond
     n_partners = 1
+
+
+_TWO_PI = 2.0 * np.pi
+
+
+class OifLocalForces(BondedInteraction):
+    """OIF moduli on a pair of triangles sharing an edge (one bond per pair):
+    stretching of the shared edge (model eq. 3: neo-Hookean ``ks``, linear
+    ``kslin``), bending (eq. 4, ``kb``), local area of both triangles (eq. 5,
+    ``kal``, each triangle weighted 1/3 per pair as it is in three pairs) and
+    membrane viscosity on the edge (``kvisc``).
+
+    Bond: for PyOIF's Angle(A, B, C, D) with shared edge BC, the particle B
+    owns the bond with partners A, C, D: ``B.add_bond((bond, A, C, D))``, or in
+    bulk ``system.part.add_bonds(bond, ids, per_bond)`` with rows (B, A, C, D).
+    The reference values r0 = |BC|, phi0 = angle_btw_triangles(A, B, C, D),
+    A01 = area ABC, A02 = area BCD are per bond (``per_bond`` rows
+    (r0, phi0, A01, A02)), so one instance serves a whole cell type; without
+    ``per_bond`` every bond gets this instance's r0, phi0, A01, A02 (the
+    ESPResSo way: one instance per angle).
+    """
+
+    _params = [Param("r0", "float", 0.0, check=non_negative, doc="relaxed edge length"),
+               Param("ks", "float", 0.0, check=non_negative, doc="neo-Hookean stretching"),
+               Param("kslin", "float", 0.0, check=non_negative, doc="linear stretching"),
+               Param("phi0", "float", 0.0,
+                     check=(lambda x: 0.0 <= x < _TWO_PI, "in [0, 2 pi)"),
+                     doc="relaxed angle between the triangles"),
+               Param("kb", "float", 0.0, check=non_negative, doc="bending"),
+               Param("A01", "float", 0.0, check=non_negative, doc="relaxed area of ABC"),
+               Param("A02", "float", 0.0, check=non_negative, doc="relaxed area of BCD"),
+               Param("kal", "float", 0.0, check=non_negative, doc="local area"),
+               Param("kvisc", "float", 0.0, check=non_negative, doc="membrane viscosity")]
+    _core_class = _lbmd.OifLocalForces
+    n_partners = 3
+    per_bond_stride = 4
+
+    def _core_object(self):
+        v = self._values
+        return self._core_class(ks=v["ks"], kslin=v["kslin"], kb=v["kb"], kal=v["kal"],
+                                kvisc=v["kvisc"])
+
+    def _default_per_bond(self, n_bonds):
+        v = self._values
+        for name in ("r0", "A01", "A02"):
+            if not v[name] > 0:
+                raise ValueError(f"OifLocalForces: parameter '{name}' must be > 0 for bonds "
+                                 f"added without per-bond reference values, got {v[name]!r}")
+        return np.tile([v["r0"], v["phi0"], v["A01"], v["A02"]], (n_bonds, 1))
+
+
+class OifGlobalForces(BondedInteraction):
+    """Global area (model eq. 6, ``ka_g``) and volume (eq. 7, ``kv``) of each
+    cell: one bond per triangle (A, B, C), ``A.add_bond((bond, B, C))``. A cell
+    is the mol_id of the triangle's first particle; one instance serves all
+    cells of a type (A0_g, V0 its relaxed surface and volume). The cells'
+    surfaces and volumes are summed once per step for all cells together."""
+
+    _params = [Param("A0_g", "float", check=positive, doc="relaxed cell surface"),
+               Param("ka_g", "float", 0.0, check=non_negative, doc="global area"),
+               Param("V0", "float", check=positive, doc="relaxed cell volume"),
+               Param("kv", "float", 0.0, check=non_negative, doc="volume")]
+    _core_class = _lbmd.OifGlobalForces
+    n_partners = 2
+
+
+class OifOutDirection(BondedInteraction):
+    """Outward unit normals of membrane nodes, for membrane_collision: one bond
+    per triangle (A, B, C) of each cell, ``A.add_bond((bond, B, C))``. Before
+    the pair forces of every step the node normals are set to the
+    area-weighted mean of their triangles' normals, pointing out of the cell
+    whatever the triangles' orientation. No forces. (ESPResSo's version is a
+    4-particle bond with three neighbours; this one uses the triangles.)"""
+
+    _params = []
+    _core_class = _lbmd.OifOutDirection
+    n_partners = 2
 
 
 class BondedInteractions:

@@ -6,11 +6,15 @@
 #pragma once
 
 #include "interactions/bonded/harmonic.hpp"
+#include "interactions/bonded/oif_global_forces.hpp"
+#include "interactions/bonded/oif_local_forces.hpp"
+#include "interactions/bonded/oif_out_direction.hpp"
 
 #include <variant>
 
 namespace pyoif {
 
-using BondedInteraction = std::variant<HarmonicBond>;
+using BondedInteraction =
+    std::variant<HarmonicBond, OifLocalForces, OifGlobalForces, OifOutDirection>;
 
-}  // namespace pyoif
+} // namespace pyoif

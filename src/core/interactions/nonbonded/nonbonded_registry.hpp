@@ -4,12 +4,13 @@
 // src/python/lbmd/bind_interactions.cpp, and add its Python name in lbmd/interactions.py.
 #pragma once
 
+#include "interactions/nonbonded/membrane_collision.hpp"
 #include "interactions/nonbonded/soft_sphere.hpp"
 
 #include <tuple>
 
 namespace pyoif {
 
-using NonbondedModels = std::tuple<SoftSphere>;
+using NonbondedModels = std::tuple<SoftSphere, MembraneCollision>;
 
-}  // namespace pyoif
+} // namespace pyoif

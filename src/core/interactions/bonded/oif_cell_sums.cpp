@@ -1,0 +1,85 @@
+#include "interactions/bonded/oif_cell_sums.hpp"
+
+#include "interactions/bonded/oif_area.hpp"
+#include "interactions/bonded/oif_volume.hpp"
+#include "utils/errors.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <string>
+
+namespace pyoif::oif {
+
+namespace {
+int local_index(const ParticleStore& p, int pid) {
+  const int i = p.index(pid);
+  if (i < 0)
+    throw SimulationInstability("OIF triangle bond refers to particle " + std::to_string(pid) +
+                                ", which does not exist");
+  return i;
+}
+} // namespace
+
+void CellSums::compute(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
+                       const Communicator& comm) {
+  const std::size_t n = group.size();
+  // The cells' mol_id range, agreed by all ranks so every rank uses the same
+  // dense slot table for the reduction.
+  int lo = INT_MAX, hi = INT_MIN;
+  for (std::size_t b = 0; b < n; ++b) {
+    const int mol = p.mol_id[local_index(p, group.bond(b)[0])];
+    lo = std::min(lo, mol);
+    hi = std::max(hi, mol);
+  }
+  if (comm.size() > 1) {
+    lo = static_cast<int>(-comm.allreduce_max(n ? -static_cast<double>(lo) : -1e18));
+    hi = static_cast<int>(comm.allreduce_max(n ? static_cast<double>(hi) : -1e18));
+  }
+  mol_ids.clear();
+  bond_cell.assign(n, -1);
+  m_min_mol = lo;
+  const long range = (hi >= lo) ? static_cast<long>(hi) - lo + 1 : 0;
+  if (range > 16 * static_cast<long>(n) + 4096 && comm.size() == 1)
+    throw InputError("OIF cells: mol_id values span " + std::to_string(range) + " numbers for " +
+                     std::to_string(n) + " triangles; number the cells (mol_id) compactly");
+  // dense per-mol arrays: [area | volume | triangles], reduced in ONE call
+  std::vector<double> sums(3 * static_cast<std::size_t>(range), 0.0);
+  std::vector<Vec3> reference(static_cast<std::size_t>(range));
+  std::vector<char> has_reference(static_cast<std::size_t>(range), 0);
+  for (std::size_t b = 0; b < n; ++b) {
+    const int* ids = group.bond(b);
+    const int i0 = local_index(p, ids[0]);
+    const long k = static_cast<long>(p.mol_id[i0]) - lo;
+    bond_cell[b] = static_cast<int>(k);
+    if (!has_reference[k]) {
+      reference[k] = p.pos[i0];
+      has_reference[k] = 1;
+    }
+    // vertices relative to the cell's reference point, minimum image
+    const Vec3 a = box.minimum_image(p.pos[i0], reference[k]);
+    const Vec3 bb = a + box.minimum_image(p.pos[local_index(p, ids[1])], p.pos[i0]);
+    const Vec3 c = a + box.minimum_image(p.pos[local_index(p, ids[2])], p.pos[i0]);
+    sums[k] += triangle_area(a, bb, c);
+    sums[range + k] += tetra_volume(a, bb, c);
+    sums[2 * range + k] += 1.0;
+  }
+  comm.allreduce_sum(sums);
+  // compact slots: only cells that have triangles
+  m_slot_of_mol.assign(static_cast<std::size_t>(range), -1);
+  area.clear();
+  volume.clear();
+  n_triangles.clear();
+  for (long k = 0; k < range; ++k) {
+    if (sums[2 * range + k] == 0.0)
+      continue;
+    m_slot_of_mol[k] = static_cast<int>(mol_ids.size());
+    mol_ids.push_back(static_cast<int>(lo + k));
+    area.push_back(sums[k]);
+    volume.push_back(sums[range + k]);
+    n_triangles.push_back(sums[2 * range + k]);
+  }
+  for (auto& s : bond_cell)
+    s = m_slot_of_mol[s];
+}
+
+} // namespace pyoif::oif

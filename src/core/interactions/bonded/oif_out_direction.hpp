@@ -1,0 +1,37 @@
+// OifOutDirection: the outward unit normal of every membrane node, for the
+// membrane-collision contacts (model eq. 9). A 3-particle bond per triangle;
+// its prepare() -- run before any pair force of the step -- writes
+// ParticleStore::normal of its nodes: the area-weighted mean of the normals of
+// the node's triangles (sum of (b - a) x (c - a)), normalised, and pointing out
+// of the cell whatever the triangles' orientation (the sign of the cell's
+// oriented volume decides). Upstream PyOIF computed the normal from three
+// neighbours in a bond that could run after the pair forces, so the contacts
+// used last step's normals; here they are always current. forces() gives nothing.
+#pragma once
+
+#include "interactions/bonded/bond_loop.hpp"
+#include "interactions/bonded/oif_cell_sums.hpp"
+
+#include <array>
+
+namespace pyoif {
+
+struct OifOutDirection {
+  static constexpr const char* name = "OifOutDirection";
+  static constexpr int n_particles = 3;
+  static constexpr int per_bond_stride = 0;
+
+  oif::CellSums sums; ///< per-cell sums, filled by prepare()
+
+  void prepare(const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
+               const Communicator& comm);
+
+  bool forces(const BondInput<3>&, std::array<Vec3, 3>& f, double& energy) const {
+    for (auto& fk : f)
+      fk.setZero();
+    energy = 0.0;
+    return true;
+  }
+};
+
+} // namespace pyoif
