@@ -1,29 +1,185 @@
 """Shapes: regions of space with a signed distance (positive outside the
-shape, where particles and fluid may be) and an outward surface normal. Used
-by ShapeBasedConstraint (particles) and LBBoundary (fluid)."""
+shape, where particles and fluid may be, negative inside) and a unit outward
+surface normal. Used by ShapeBasedConstraint (particles) and LBBoundary
+(fluid: lattice nodes with distance <= 0 are boundary nodes).
+
+Keyword names and meanings are those of ESPResSo 4.2's ``espressomd.shapes``.
+``direction=-1`` turns a shape inside out (a hollow sphere, a pipe, a box
+whose interior is free): distance and normal change sign.
+"""
+import collections.abc
+
 import numpy as np
 
 from . import _lbmd
-from .validation import Param, ParameterObject, unit_or_nonzero
+from .validation import Param, ParameterObject, parse, positive, non_negative, unit_or_nonzero
+
+direction_check = (lambda d: d in (1, -1), "1 or -1 (1: the solid, -1: hollow, its complement)")
+
+
+def _position(owner, pos):
+    return Param("pos", "vec3").convert(owner, pos)
 
 
 class Shape(ParameterObject):
-    """Base of shapes: subclasses declare ``_params`` and build ``_core``."""
+    """Base of shapes: subclasses declare ``_params`` and build ``_core`` (the
+    C++ shape, shared with the constraints and the lattice-Boltzmann code)."""
 
     def calc_dist(self, pos):
-        """(signed distance, outward unit normal) of the point pos."""
-        dist, normal = self._core.calc_dist(np.asarray(pos, dtype=float))
-        return dist, np.asarray(normal)
+        """(signed distance, outward unit normal) of the point pos; the closest
+        surface point is ``pos - dist * normal``."""
+        dist, normal = self._core.calc_dist(_position(f"{type(self).__name__}.calc_dist", pos))
+        return float(dist), np.asarray(normal)
+
+    def calc_distance(self, position):
+        """ESPResSo's form: (signed distance, vector from the closest surface
+        point to position)."""
+        dist, normal = self.calc_dist(position)
+        return dist, dist * normal
 
     def is_inside(self, position):
-        return bool(self._core.is_inside(np.asarray(position, dtype=float)))
+        """True where the shape occupies space (signed distance <= 0)."""
+        return bool(self._core.is_inside(_position(f"{type(self).__name__}.is_inside", position)))
 
 
 class Wall(Shape):
-    """Half-space behind the plane normal·x = dist; particles live on the
-    side the normal points to."""
+    """Half-space behind the plane normal·x = dist (normal made unit); particles
+    live on the side the normal points to."""
 
     _params = [Param("normal", "vec3", check=unit_or_nonzero()), Param("dist", "float", 0.0)]
 
     def _validate(self):
         object.__setattr__(self, "_core", _lbmd.Wall(self.normal, self.dist))
+
+
+class Sphere(Shape):
+    """Ball of the given radius about center; direction=-1: a spherical cavity
+    (the shape is everything outside the ball)."""
+
+    _params = [Param("center", "vec3"), Param("radius", "float", check=positive),
+               Param("direction", "int", 1, check=direction_check)]
+
+    def _validate(self):
+        object.__setattr__(self, "_core", _lbmd.Sphere(self.center, self.radius, self.direction))
+
+
+class Cylinder(Shape):
+    """Finite cylinder of the given radius and length (the full length, centred
+    on center) about axis (any non-zero length). direction=-1: hollow (particles
+    inside); open=True: no caps (a tube, meant to run through the periodic box:
+    beyond its ends the distance is to the rim circles and counts as inside the
+    shape for direction=-1, as in ESPResSo)."""
+
+    _params = [Param("center", "vec3"), Param("axis", "vec3", check=unit_or_nonzero()),
+               Param("radius", "float", check=positive), Param("length", "float", check=positive),
+               Param("direction", "int", 1, check=direction_check),
+               Param("open", "bool", False)]
+
+    def _validate(self):
+        object.__setattr__(self, "_core", _lbmd.Cylinder(self.center, self.axis, self.radius,
+                                                         self.length, self.direction, self.open))
+
+
+class Rhomboid(Shape):
+    """Parallelepiped {corner + s a + t b + u c : 0 <= s, t, u <= 1}; outside,
+    the exact distance (faces, edges, corners); inside, minus the distance to
+    the nearest face. direction=-1: hollow (a box whose interior is free)."""
+
+    _params = [Param("corner", "vec3"), Param("a", "vec3", check=unit_or_nonzero()),
+               Param("b", "vec3", check=unit_or_nonzero()),
+               Param("c", "vec3", check=unit_or_nonzero()),
+               Param("direction", "int", 1, check=direction_check)]
+
+    def _validate(self):
+        a, b, c = self.a, self.b, self.c
+        volume = abs(float(np.dot(a, np.cross(b, c))))
+        if not volume > 1e-10 * np.linalg.norm(a) * np.linalg.norm(b) * np.linalg.norm(c):
+            raise ValueError("Rhomboid: parameters 'a', 'b', 'c' must not be coplanar "
+                             f"(the parallelepiped has no volume), got a={a.tolist()}, "
+                             f"b={b.tolist()}, c={c.tolist()}")
+        object.__setattr__(self, "_core", _lbmd.Rhomboid(self.corner, a, b, c, self.direction))
+
+
+class SimplePore(Shape):
+    """A slab of thickness length normal to axis, centred on center, pierced by
+    a cylindrical channel of the given radius whose mouths are rounded with
+    torus segments of radius smoothing_radius (0 <= smoothing_radius <=
+    length/2). The shape is the slab material."""
+
+    _params = [Param("center", "vec3"), Param("axis", "vec3", check=unit_or_nonzero()),
+               Param("length", "float", check=positive), Param("radius", "float", check=positive),
+               Param("smoothing_radius", "float", check=non_negative)]
+
+    def _validate(self):
+        if self.smoothing_radius > 0.5 * self.length:
+            raise ValueError("SimplePore: parameter 'smoothing_radius' must be <= length/2 = "
+                             f"{0.5 * self.length!r}, got {self.smoothing_radius!r}")
+        object.__setattr__(self, "_core", _lbmd.SimplePore(
+            self.center, self.axis, self.length, self.radius, self.smoothing_radius))
+
+
+class Union(Shape):
+    """Union of shapes: the signed distance is the smallest of the members'
+    distances, the normal that member's. ``u.add(shape)`` or
+    ``u.add([s1, s2])``, ``remove``, ``clear``, ``size()``; ``Union(shapes=[...])``
+    adds at construction. An empty union occupies nothing (distance +inf)."""
+
+    _params = [Param("shapes", "object", ())]
+
+    def __init__(self, **kwargs):
+        values = parse("Union", self._params, kwargs)
+        object.__setattr__(self, "_values", {})
+        object.__setattr__(self, "_core", _lbmd.Union())
+        object.__setattr__(self, "_shapes", [])
+        self.add(values["shapes"])
+
+    @staticmethod
+    def _each(owner, shape):
+        # A Union is itself iterable: a shape is added as one member.
+        is_many = isinstance(shape, collections.abc.Iterable) and not isinstance(shape, Shape)
+        items = shape if is_many else [shape]
+        for s in items:
+            if not isinstance(s, Shape):
+                raise TypeError(f"Union.{owner}: parameter 'shape' must be a Shape or an "
+                                f"iterable of shapes, got {type(s).__name__}")
+            yield s
+
+    def add(self, shape):
+        """Add a shape, or every shape of an iterable."""
+        for s in list(self._each("add", shape)):
+            self._core.add(s._core)
+            self._shapes.append(s)
+
+    def remove(self, shape):
+        """Remove a shape, or every shape of an iterable."""
+        for s in list(self._each("remove", shape)):
+            if not any(s is m for m in self._shapes):
+                raise ValueError("Union.remove: parameter 'shape' is not a member of this union")
+            self._core.remove(s._core)
+            self._shapes.remove(next(m for m in self._shapes if m is s))
+
+    def clear(self):
+        self._core.clear()
+        self._shapes.clear()
+
+    def size(self):
+        return len(self._shapes)
+
+    def __len__(self):
+        return len(self._shapes)
+
+    def __iter__(self):
+        return iter(list(self._shapes))
+
+    def __getitem__(self, i):
+        return self._shapes[i]
+
+    @property
+    def shapes(self):
+        return list(self._shapes)
+
+    def get_params(self):
+        return {"shapes": list(self._shapes)}
+
+    def __repr__(self):
+        return f"Union(shapes={self._shapes!r})"
