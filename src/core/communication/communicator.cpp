@@ -2,13 +2,24 @@
 
 namespace pyoif {
 
-Communicator::Communicator() {
+namespace {
+void ensure_mpi_initialised() {
   int initialised = 0;
   MPI_Initialized(&initialised);
   if (!initialised) {
     int provided = 0;
     MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
   }
+}
+}  // namespace
+
+Communicator::Communicator() {
+  ensure_mpi_initialised();
+  query();
+}
+
+Communicator::Communicator(MPI_Comm comm) : m_comm(comm) {
+  ensure_mpi_initialised();
   query();
 }
 

@@ -15,7 +15,7 @@ public:
   /** Wraps MPI_COMM_WORLD (MPI is initialised by the Python package via mpi4py,
    *  or here if nobody has done it yet). */
   Communicator();
-  explicit Communicator(MPI_Comm comm) : m_comm(comm) { query(); }
+  explicit Communicator(MPI_Comm comm);
 
   int rank() const { return m_rank; }
   int size() const { return m_size; }

@@ -7,7 +7,12 @@
 
 namespace pyoif {
 
-System::System(const Vec3& box_l, const std::array<bool, 3>& periodic) : box(box_l, periodic) {}
+// Until the domain decomposition lands (roadmap item 1), every rank of an
+// mpirun holds the whole system (replicated SPMD), so the System's reductions
+// run over MPI_COMM_SELF: a reduction over all ranks would count each particle
+// once per rank.
+System::System(const Vec3& box_l, const std::array<bool, 3>& periodic)
+    : box(box_l, periodic), comm(MPI_COMM_SELF) {}
 
 void System::set_time_step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt))

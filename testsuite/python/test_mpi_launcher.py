@@ -1,0 +1,43 @@
+"""Under `mpirun -np N pyoif script.py` every rank runs the script (SPMD).
+Until the domain decomposition lands each rank holds the whole system, so all
+ranks must produce bit-identical trajectories, equal to a serial run."""
+import unittest
+
+import numpy as np
+from mpi4py import MPI
+
+import lbmd
+
+
+def trajectory():
+    s = lbmd.System(box_l=[6.0, 6.0, 6.0])
+    s.time_step = 0.005
+    rng = np.random.default_rng(11)
+    g = np.mgrid[0:4, 0:4, 0:4].reshape(3, -1).T * 1.5 + 0.3
+    s.part.add(pos=g + rng.uniform(-0.05, 0.05, g.shape), v=rng.normal(size=g.shape))
+    s.non_bonded_inter[0, 0].soft_sphere.set_params(a=0.5, n=12, cutoff=2.0)
+    s.thermostat.set_langevin(kT=1.0, gamma=0.5, seed=7)
+    s.integrator.run(500)
+    return s.part.all().pos, s.analysis.energy()["total"]
+
+
+class MpiLauncher(unittest.TestCase):
+    def test_ranks_agree(self):
+        comm = MPI.COMM_WORLD
+        pos, energy = trajectory()
+        all_pos = comm.allgather(pos)
+        all_energy = comm.allgather(energy)
+        for p, e in zip(all_pos, all_energy):
+            np.testing.assert_array_equal(p, all_pos[0])
+            self.assertEqual(e, all_energy[0])
+        # every rank also agrees with a second (serial) run of itself
+        pos2, energy2 = trajectory()
+        np.testing.assert_array_equal(pos2, pos)
+        self.assertTrue(np.isfinite(energy))
+
+    def test_world_size(self):
+        self.assertGreaterEqual(MPI.COMM_WORLD.Get_size(), 1)
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,146 @@
+"""System-level API: construction, parameters read back as set, ESPResSo
+porting helpers, and every documented bad input raising a clear exception."""
+import unittest
+
+import numpy as np
+
+import lbmd
+
+
+class SystemApi(unittest.TestCase):
+    def test_submodules_available_after_import(self):
+        for name in ("lb", "shapes", "constraints", "interactions", "lbboundaries"):
+            self.assertTrue(hasattr(lbmd, name), name)
+
+    def test_parameters_read_back(self):
+        s = lbmd.System(box_l=[4, 5, 6], periodicity=[True, False, True])
+        s.time_step = 0.025
+        s.cell_system.skin = 0.3
+        np.testing.assert_array_equal(s.box_l, [4, 5, 6])
+        self.assertEqual(s.periodicity, [True, False, True])
+        self.assertEqual(s.time_step, 0.025)
+        self.assertEqual(s.cell_system.skin, 0.3)
+        s.non_bonded_inter[0, 1].soft_sphere.set_params(a=2.0, n=3.0, cutoff=1.5, offset=0.1)
+        self.assertEqual(s.non_bonded_inter[1, 0].soft_sphere.get_params(),
+                         {"a": 2.0, "n": 3.0, "cutoff": 1.5, "offset": 0.1})
+        s.non_bonded_inter[0, 1].soft_sphere.deactivate()
+        self.assertFalse(s.non_bonded_inter[0, 1].soft_sphere.is_active())
+
+    def test_two_systems_are_independent(self):
+        a = lbmd.System(box_l=[10, 10, 10])
+        b = lbmd.System(box_l=[5, 5, 5])
+        a.time_step = b.time_step = 0.01
+        a.part.add(pos=[1, 1, 1], v=[1, 0, 0])
+        b.part.add(pos=[[1, 1, 1], [2, 2, 2]])
+        a.integrator.run(10)
+        self.assertEqual(len(a.part), 1)
+        self.assertEqual(len(b.part), 2)
+        np.testing.assert_allclose(a.part.by_id(0).pos, [1.1, 1, 1])
+        np.testing.assert_array_equal(b.part.by_id(0).pos, [1, 1, 1])
+
+    def test_time_advances(self):
+        s = lbmd.System(box_l=[10, 10, 10])
+        s.time_step = 0.5
+        s.integrator.run(4)
+        self.assertAlmostEqual(s.time, 2.0)
+
+    def test_features(self):
+        lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])
+        self.assertTrue(lbmd.has_features("LB_BOUNDARIES"))
+        self.assertFalse(lbmd.has_features("ELECTROSTATICS"))
+        with self.assertRaises(lbmd.FeaturesError) as cm:
+            lbmd.assert_features(["MASS", "ELECTROSTATICS", "DIPOLES"])
+        self.assertIn("ELECTROSTATICS, DIPOLES", str(cm.exception))
+
+    def test_energy_dict(self):
+        s = lbmd.System(box_l=[10, 10, 10])
+        s.part.add(pos=[[1, 1, 1], [2, 1, 1]], v=[[1, 0, 0], [0, 2, 0]], mass=[1.0, 0.5])
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=1.0, n=2.0, cutoff=2.0)
+        e = s.analysis.energy()
+        self.assertAlmostEqual(e["kinetic"], 0.5 + 1.0)
+        self.assertAlmostEqual(e["non_bonded"], 1.0)
+        self.assertAlmostEqual(e["total"], 2.5)
+        self.assertEqual(e["bonded"], 0.0)
+
+    def test_langevin_equipartition(self):
+        """kT from the mean kinetic energy of free particles, within 3 %
+        (5000 particles x 20 decorrelated samples: statistical error ~0.3 %)."""
+        s = lbmd.System(box_l=[20, 20, 20])
+        s.time_step = 0.01
+        s.part.add(pos=np.random.default_rng(0).random((5000, 3)) * 20, mass=2.0)
+        s.thermostat.set_langevin(kT=1.5, gamma=2.0, seed=42)
+        s.integrator.run(500)
+        samples = []
+        for _ in range(20):
+            s.integrator.run(50)
+            samples.append(np.mean(2.0 * np.sum(s.part.all().v ** 2, axis=1)) / 3)
+        self.assertAlmostEqual(np.mean(samples) / 1.5, 1.0, delta=0.03)
+
+    def test_langevin_damping_rate(self):
+        """kT = 0: velocity decays as exp(-gamma t / m) (relaxation runs)."""
+        s = lbmd.System(box_l=[10, 10, 10])
+        s.time_step = 0.001
+        p = s.part.add(pos=[5, 5, 5], v=[1, 0, 0], mass=2.0)
+        s.thermostat.set_langevin(kT=0.0, gamma=1.0)
+        s.integrator.run(1000)
+        self.assertAlmostEqual(p.v[0], np.exp(-0.5), delta=1e-3)
+
+
+class SystemBadInput(unittest.TestCase):
+    def raises(self, exc, word, fn, *args, **kwargs):
+        with self.assertRaises(exc) as cm:
+            fn(*args, **kwargs)
+        self.assertIn(word, str(cm.exception), msg=str(cm.exception))
+
+    def test_construction(self):
+        self.raises(TypeError, "box_l", lbmd.System)
+        self.raises(ValueError, "box_l", lbmd.System, box_l=[1, 2])
+        self.raises(ValueError, "box_l", lbmd.System, box_l=[1, -2, 3])
+        self.raises(ValueError, "box_l", lbmd.System, box_l=[1, np.inf, 3])
+        self.raises(TypeError, "'box_L'", lbmd.System, box_L=[1, 2, 3])
+        self.raises(ValueError, "periodicity", lbmd.System, box_l=[1, 1, 1], periodicity=[1, 0])
+
+    def test_attributes(self):
+        s = lbmd.System(box_l=[10, 10, 10])
+        self.raises(ValueError, "time_step", setattr, s, "time_step", 0.0)
+        self.raises(ValueError, "time_step", setattr, s, "time_step", -0.1)
+        self.raises(TypeError, "time_step", setattr, s, "time_step", "0.1")
+        self.raises(AttributeError, "timestep", setattr, s, "timestep", 0.1)
+        self.raises(ValueError, "skin", setattr, s.cell_system, "skin", -1.0)
+        self.raises(RuntimeError, "time_step", s.integrator.run, 10)
+        s.time_step = 0.1
+        self.raises(ValueError, "steps", s.integrator.run, -1)
+        self.raises(TypeError, "steps", s.integrator.run, 1.5)
+
+    def test_interactions(self):
+        s = lbmd.System(box_l=[10, 10, 10])
+        ss = s.non_bonded_inter[0, 0].soft_sphere
+        self.raises(TypeError, "'cutoff'", ss.set_params, a=1.0, n=2.0)
+        self.raises(ValueError, "'a'", ss.set_params, a=-1.0, n=2.0, cutoff=1.0)
+        self.raises(TypeError, "'cut'", ss.set_params, a=1.0, n=2.0, cutoff=1.0, cut=1.0)
+        self.raises(ValueError, "types", s.non_bonded_inter.__getitem__, (-1, 0))
+        self.raises(AttributeError, "lennard_jones", getattr, s.non_bonded_inter[0, 0], "lennard_jones")
+        self.raises(TypeError, "set_langevin", s.thermostat.set_langevin, kT=1.0)
+        self.raises(ValueError, "seed", s.thermostat.set_langevin, kT=1.0, gamma=1.0)
+        self.raises(ValueError, "'gamma'", s.thermostat.set_langevin, kT=1.0, gamma=-1.0, seed=1)
+
+    def test_range_larger_than_box(self):
+        s = lbmd.System(box_l=[2, 10, 10])
+        s.time_step = 0.01
+        s.part.add(pos=[1, 1, 1])
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=1.0, n=2.0, cutoff=3.0)
+        self.raises(ValueError, "exceeds the box", s.integrator.run, 1)
+
+    def test_explosion_reports_particle_and_time(self):
+        s = lbmd.System(box_l=[10, 10, 10])
+        s.time_step = 0.1
+        s.part.add(pos=[[5, 5, 5], [5.01, 5, 5]])
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=1e30, n=12.0, cutoff=1.0)
+        with self.assertRaises(lbmd.SimulationInstability) as cm:
+            s.integrator.run(100)
+        self.assertIn("particle", str(cm.exception))
+        self.assertIn("time", str(cm.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
