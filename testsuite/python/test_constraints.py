@@ -1,0 +1,212 @@
+"""Shape-based constraints: a particle at a known distance from each shape
+feels the soft-sphere force of the pair (particle type, constraint type),
+F = n a (d - offset)^-(n+1) along the shape's outward normal (model eq. 8),
+none beyond the range cutoff + offset; the constraint's total_force is minus
+the force on the particles; a particle inside a non-penetrable shape stops
+the run with SimulationInstability, inside a penetrable one it does not.
+
+The distances and normals below are computed by hand (not by the code under
+test): faces, edges, rims and the pore's rounded mouth, both directions."""
+import contextlib
+import unittest
+
+import numpy as np
+
+import lbmd
+import lbmd.constraints
+import lbmd.shapes as shapes
+
+A, N, CUTOFF, OFFSET = 2.0, 3.0, 2.5, 0.2
+RTOL = 1e-12
+WALL_TYPE = 1
+
+
+def soft_sphere_force(d):
+    return N * A * (d - OFFSET) ** -(N + 1)
+
+
+def cases():
+    """(label, shape, particle position, distance, outward normal), hand-computed."""
+    c = np.array([5.0, 5.0, 5.0])
+    return [
+        ("wall", shapes.Wall(normal=[0, 0, 2], dist=1), [5, 5, 2.5], 1.5, [0, 0, 1]),
+        ("sphere", shapes.Sphere(center=c, radius=2), c + [0, 0, 3], 1.0, [0, 0, 1]),
+        ("hollow sphere", shapes.Sphere(center=c, radius=3, direction=-1), c + [0, 2, 0], 1.0,
+         [0, -1, 0]),
+        ("cylinder rim", shapes.Cylinder(center=c, axis=[0, 0, 1], radius=2, length=4),
+         c + [2.6, 0, 2.8], 1.0, [0.6, 0, 0.8]),
+        ("cylinder cap", shapes.Cylinder(center=c, axis=[0, 0, -3], radius=2, length=4),
+         c + [1, 1, -3.1], 1.1, [0, 0, -1]),
+        ("hollow cylinder", shapes.Cylinder(center=c, axis=[0, 0, 1], radius=3, length=8,
+                                            direction=-1), c + [1.5, 0, 0], 1.5, [-1, 0, 0]),
+        ("open pipe", shapes.Cylinder(center=c, axis=[1, 0, 0], radius=3, length=10,
+                                      direction=-1, open=True), c + [4.9, 0, -1.7], 1.3,
+         [0, 0, 1]),
+        ("rhomboid edge", shapes.Rhomboid(corner=[3, 3, 3], a=[4, 0, 0], b=[0, 4, 0],
+                                          c=[0, 0, 4]), [7.6, 7.8, 5], 1.0, [0.6, 0.8, 0]),
+        ("rhomboid corner", shapes.Rhomboid(corner=[3, 3, 3], a=[4, 0, 0], b=[0, 4, 0],
+                                            c=[0, 0, 4]), [2.6, 2.2, 2.2], 1.2,
+         [-1, -2, -2]),
+        ("hollow rhomboid", shapes.Rhomboid(corner=[1, 1, 1], a=[8, 0, 0], b=[0, 8, 0],
+                                            c=[0, 0, 8], direction=-1), [2.2, 5, 5], 1.2,
+         [1, 0, 0]),
+        ("pore channel", shapes.SimplePore(center=c, axis=[0, 0, 1], length=4, radius=2,
+                                           smoothing_radius=1), c + [0, -0.5, 0], 1.5, [0, 1, 0]),
+        ("pore rounding", shapes.SimplePore(center=c, axis=[0, 0, 1], length=4, radius=2,
+                                            smoothing_radius=1), c + [1.8, 0, 2.6], 1.0,
+         [-0.6, 0, 0.8]),
+        ("union", shapes.Union(shapes=[shapes.Sphere(center=c, radius=1),
+                                       shapes.Wall(normal=[0, 0, 1], dist=0.5)]),
+         c + [0, 0, -2.5], 1.5, [0, 0, -1]),
+    ]
+
+
+class ShapeConstraintForces(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.system = lbmd.System(box_l=[10.0, 10.0, 10.0])
+        cls.system.time_step = 0.01
+        cls.system.cell_system.skin = 0.4
+        cls.system.non_bonded_inter[0, WALL_TYPE].soft_sphere.set_params(
+            a=A, n=N, cutoff=CUTOFF, offset=OFFSET)
+
+    def tearDown(self):
+        self.clear()
+
+    def clear(self):
+        self.system.constraints.clear()
+        self.system.part.clear()
+
+    @contextlib.contextmanager
+    def cleared(self):
+        """Each sub-test starts from no constraints and no particles, even
+        after a failed one."""
+        self.clear()
+        try:
+            yield
+        finally:
+            self.clear()
+
+    def add(self, shape, penetrable=False):
+        return self.system.constraints.add(lbmd.constraints.ShapeBasedConstraint(
+            shape=shape, particle_type=WALL_TYPE, penetrable=penetrable))
+
+    def test_force_is_analytic_soft_sphere(self):
+        for label, shape, pos, dist, normal in cases():
+            with self.subTest(label), self.cleared():
+                normal = np.asarray(normal, float) / np.linalg.norm(normal)
+                # The shape agrees with the hand computation...
+                d, n = shape.calc_dist(pos)
+                self.assertAlmostEqual(d, dist, delta=1e-12)
+                np.testing.assert_allclose(n, normal, atol=1e-12)
+                # ...and the particle feels the soft sphere at that distance.
+                c = self.add(shape)
+                p = self.system.part.add(pos=pos, type=0)
+                self.system.integrator.run(0, recalc_forces=True)
+                expected = soft_sphere_force(dist) * normal
+                np.testing.assert_allclose(p.f, expected, rtol=RTOL, atol=1e-14)
+                np.testing.assert_allclose(c.total_force(), -expected, rtol=RTOL, atol=1e-14)
+
+    def test_no_force_beyond_the_range(self):
+        for label, shape, pos, dist, normal in cases():
+            with self.subTest(label), self.cleared():
+                normal = np.asarray(normal, float) / np.linalg.norm(normal)
+                # Move out along the normal to just past cutoff + offset, where
+                # the normal is still the same (all cases are on flat or convex parts).
+                far = np.asarray(pos, float) + (CUTOFF + OFFSET + 0.01 - dist) * normal
+                d, _ = shape.calc_dist(far)
+                if label in ("hollow sphere", "hollow cylinder", "hollow rhomboid", "open pipe",
+                             "pore channel", "union"):
+                    continue  # concave free space: moving along the normal leaves the region
+                self.assertAlmostEqual(d, CUTOFF + OFFSET + 0.01, delta=1e-12)
+                c = self.add(shape)
+                p = self.system.part.add(pos=far, type=0)
+                self.system.integrator.run(0, recalc_forces=True)
+                np.testing.assert_array_equal(p.f, [0, 0, 0])
+                np.testing.assert_array_equal(c.total_force(), [0, 0, 0])
+
+    def test_force_just_inside_the_range(self):
+        shape = shapes.Wall(normal=[0, 0, 1], dist=1)
+        self.add(shape)
+        d = CUTOFF + OFFSET - 1e-3
+        p = self.system.part.add(pos=[5, 5, 1 + d], type=0)
+        self.system.integrator.run(0, recalc_forces=True)
+        np.testing.assert_allclose(p.f, [0, 0, soft_sphere_force(d)], rtol=RTOL)
+
+    def test_several_particles_sum_in_total_force(self):
+        shape = shapes.Sphere(center=[5, 5, 5], radius=2)
+        c = self.add(shape)
+        dists = [0.5, 1.0, 1.7]
+        dirs = np.array([[1, 0, 0], [0, -1, 0], [0, 0.6, 0.8]])
+        ps = [self.system.part.add(pos=np.array([5, 5, 5]) + (2 + d) * e, type=0)
+              for d, e in zip(dists, dirs)]
+        # A particle of a type without an interaction with the wall type feels nothing.
+        other = self.system.part.add(pos=[5, 5, 7.5], type=2)
+        self.system.integrator.run(0, recalc_forces=True)
+        total = np.zeros(3)
+        for p, d, e in zip(ps, dists, dirs):
+            np.testing.assert_allclose(p.f, soft_sphere_force(d) * e, rtol=RTOL)
+            total += p.f
+        np.testing.assert_array_equal(other.f, [0, 0, 0])
+        np.testing.assert_allclose(c.total_force(), -total, rtol=RTOL)
+
+    def test_penetration(self):
+        inside_points = {
+            "wall": [5, 5, 0.5], "sphere": [5, 5, 5.5], "hollow sphere": [5, 5, 9.5],
+            "cylinder rim": [5.5, 5, 5], "rhomboid edge": [4, 4, 4],
+            "hollow rhomboid": [0.5, 5, 5], "pore channel": [5, 8, 5], "union": [5, 5, 0.2],
+        }
+        for label, shape, _, _, _ in cases():
+            if label not in inside_points:
+                continue
+            with self.subTest(label), self.cleared():
+                self.assertTrue(shape.is_inside(inside_points[label]))
+                self.add(shape, penetrable=False)
+                self.system.part.add(pos=inside_points[label], type=0)
+                with self.assertRaises(lbmd.SimulationInstability) as cm:
+                    self.system.integrator.run(0, recalc_forces=True)
+                self.assertIn("penetrated", str(cm.exception))
+                self.clear()
+                # Penetrable: no error, and no force from inside.
+                c = self.add(shape, penetrable=True)
+                p = self.system.part.add(pos=inside_points[label], type=0)
+                self.system.integrator.run(0, recalc_forces=True)
+                np.testing.assert_array_equal(p.f, [0, 0, 0])
+                np.testing.assert_array_equal(c.total_force(), [0, 0, 0])
+
+    def test_particle_held_off_a_wall_by_the_constraint(self):
+        # Dynamics: a particle pushed towards a sphere by a constant external
+        # force comes to rest (Langevin friction) where the soft-sphere force
+        # balances it: n a (d - offset)^-(n+1) = |F_ext|.
+        self.system.thermostat.set_langevin(kT=0.0, gamma=2.0, seed=1)
+        try:
+            shape = shapes.Sphere(center=[5, 5, 5], radius=2)
+            self.add(shape)
+            f_ext = 3.0
+            p = self.system.part.add(pos=[5, 5, 8.5], type=0, ext_force=[0, 0, -f_ext])
+            self.system.integrator.run(4000)
+            d_eq = OFFSET + (N * A / f_ext) ** (1.0 / (N + 1))
+            self.assertAlmostEqual(p.pos[2] - 7.0, d_eq, delta=1e-6)
+            np.testing.assert_allclose(p.v, [0, 0, 0], atol=1e-6)
+        finally:
+            self.system.thermostat.turn_off()
+
+    def test_bad_constraint_arguments(self):
+        wall = shapes.Wall(normal=[0, 0, 1], dist=1)
+        C = lbmd.constraints.ShapeBasedConstraint
+        with self.assertRaises(TypeError) as cm:
+            C(shape="wall", particle_type=1)
+        self.assertIn("shape", str(cm.exception))
+        with self.assertRaises(ValueError) as cm:
+            C(shape=wall, particle_type=-1)
+        self.assertIn("particle_type", str(cm.exception))
+        with self.assertRaises(TypeError) as cm:
+            C(shape=wall, particle_type=1, penetrable="no")
+        self.assertIn("penetrable", str(cm.exception))
+        with self.assertRaises(TypeError) as cm:
+            C(shape=wall, particle_type=1, stiffness=3)
+        self.assertIn("stiffness", str(cm.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
