@@ -1,27 +1,178 @@
-// PLACEHOLDER owned by the lattice-Boltzmann work: the interface the system
-// and the integrator rely on. The LB implementation replaces this file but
-// keeps these members.
+// Lattice-Boltzmann D3Q19 fluid on a cubic lattice with one ghost (halo) layer.
+//
+// Storage: structure of arrays, population q of padded node n at
+// f[q * stride + n], padded node index n = (x * Py + y) * Pz + z with
+// x, y, z in [0, N + 1] (0 and N + 1 are the ghost layer; the lattice node
+// (i, j, k) of the domain is padded node (i + 1, j + 1, k + 1) and sits at
+// position ((i, j, k) + 1/2) * agrid). The stored populations are the
+// pre-collision (post-streaming) ones, so every node property is local.
+//
+// One update (step()): a fused collide-and-push kernel over the fluid nodes
+// only (contiguous runs along z), a halo exchange that folds what was pushed
+// into the ghost layer back into the domain (periodicity, and the place where
+// an MPI exchange would go), and halfway bounce-back on the precomputed
+// fluid-solid links (Ladd 1994, moving walls by the momentum term).
+//
+// Units: populations are mass densities (the unit of `dens`); velocities in
+// the kernel are lattice velocities u * tau / agrid, force densities are
+// momentum-density changes per update in those units, F * tau^2 / agrid.
 #pragma once
 
+#include "lb/lb_lattice.hpp"
+#include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
 #include "utils/vector.hpp"
 
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
 namespace pyoif::lb {
+
+enum class Collision { mrt, trt, bgk };
+
+/** Parameters in MD units (ESPResSo 4.2 names). */
+struct LBParams {
+  double agrid = 1.0;
+  double tau = 1.0;
+  double density = 1.0;        ///< mass per volume
+  double viscosity = 1.0;      ///< kinematic, length^2 / time
+  double bulk_viscosity = 1.0; ///< kinematic (MRT only; BGK and TRT tie it to visc)
+  Vec3 ext_force_density = Vec3::Zero();
+  double kT = 0.0;
+  std::uint64_t seed = 0;
+  Collision collision = Collision::mrt;
+  int n_threads = 0; ///< 0: OMP_NUM_THREADS if set, else 1
+};
+
+/** A boundary: nodes whose centre lies in the shape (dist <= 0) are solid,
+ *  moving with `velocity` (MD units). */
+struct BoundarySpec {
+  std::shared_ptr<const shapes::Shape> shape;
+  Vec3 velocity = Vec3::Zero();
+};
+
+/** Post-collision = equilibrium + lambda (pre - equilibrium) per mode group;
+ *  lambda = 1 - omega, omega the relaxation rate. */
+struct Relaxation {
+  double shear, bulk, even, odd;
+};
+
+using Populations = std::array<double, d3q19::Q>;
+using Mat3 = Eigen::Matrix3d;
 
 class LBFluid {
 public:
-  double agrid() const { return m_agrid; }
-  double tau() const { return m_tau; }
-  /** Throws InputError when the fluid does not fit the box or the time step. */
+  /** Throws InputError for a bad parameter or a box not divisible by agrid. */
+  LBFluid(const LBParams& params, const BoxGeometry& box);
+  ~LBFluid();
+  LBFluid(const LBFluid&) = delete;
+  LBFluid& operator=(const LBFluid&) = delete;
+
+  double agrid() const { return m_p.agrid; }
+  double tau() const { return m_p.tau; }
+  const LBParams& params() const { return m_p; }
+  const Relaxation& relaxation() const { return m_relax; }
+  const Vec3i& grid() const { return m_n; }
+  std::uint64_t n_updates() const { return m_updates; }
+  int n_threads() const { return m_threads; }
+  void set_n_threads(int n);
+  void set_ext_force_density(const Vec3& f);
+
+  /** Throws InputError when the fluid does not fit the box (box_l a multiple
+   *  of agrid, unchanged since creation) or tau is not a multiple of time_step. */
   void validate(const BoxGeometry& box, double time_step) const;
-  /** One lattice update: collide (with the forces accumulated since the last
-   *  update), stream, boundaries; then the force field is cleared. */
+  /** One lattice update: collide with the force density accumulated since the
+   *  last update (+ ext_force_density), stream, bounce back; clear the force
+   *  field. Throws SimulationInstability naming node and update on a
+   *  non-positive or non-finite density or a speed >= the lattice sound speed. */
   void step();
+  /** Momentum of the populations plus the impulse accumulated in the force
+   *  field that the next update will apply (particle coupling), MD units. No
+   *  half-force term: a uniform ext_force_density raises it by exactly
+   *  F V tau per update, and particle + fluid momentum is conserved exactly. */
   Vec3 total_momentum() const;
   double total_mass() const;
 
+  // --- boundaries -------------------------------------------------------------
+  /** Replaces all boundaries; nodes that become fluid start at rest at `dens`. */
+  void set_boundaries(const std::vector<BoundarySpec>& boundaries);
+  /** Force of the fluid on boundary b in the last update (momentum exchange). */
+  Vec3 boundary_force(int b) const;
+  std::size_t n_fluid_nodes() const { return m_n_fluid; }
+  std::size_t n_links() const { return m_links.size(); }
+
+  // --- node access: (i, j, k) in [0, N) ----------------------------------------
+  /** -1 for a fluid node, else the index of the boundary. */
+  int node_boundary(const Vec3i& node) const;
+  double node_density(const Vec3i& node) const;
+  /** (j + F_ext tau / 2) / rho, the velocity of the Guo-forcing scheme. */
+  Vec3 node_velocity(const Vec3i& node) const;
+  Populations node_populations(const Vec3i& node) const;
+  Mat3 node_pressure_tensor(const Vec3i& node) const;
+  void set_node_populations(const Vec3i& node, const Populations& f);
+  /** Sets the equilibrium populations of density rho and velocity u. */
+  void set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u);
+
+  // --- particle coupling (lattice indices are padded node indices) -----------
+  /** Padded index of lattice node (i, j, k), folded periodically. */
+  std::size_t padded_index(int i, int j, int k) const;
+  /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
+  Vec3 velocity_at_index(std::size_t n) const;
+  /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
+  void add_impulse(std::size_t n, const Vec3& impulse);
+
+  // --- output -----------------------------------------------------------------
+  void write_vtk_velocity(const std::string& path) const;
+  void write_vtk_boundary(const std::string& path) const;
+
 private:
-  double m_agrid = 1.0, m_tau = 1.0;
+  struct Run {
+    std::size_t start;
+    int length;
+  };
+  struct Link {
+    std::size_t node, solid; ///< fluid node, padded index of the solid neighbour
+    int q, boundary;         ///< direction fluid -> solid, boundary index
+    double wall_term;        ///< 6 w_q rho0 c_q . u_wall (lattice units)
+  };
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(x) * m_pad[1] + y) * m_pad[2] + z;
+  }
+  std::size_t checked_node(const Vec3i& node) const;
+  void rebuild_geometry();
+  void halo_exchange(double* f) const;
+  void apply_bounce_back(double* f) const;
+  template <bool thermal, bool with_field>
+  bool update_run(const Run& r, const double* src, double* dst) const;
+  void report_instability(const Run& r) const;
+  void moments(std::size_t n, double& rho, Vec3& j) const;
+
+  LBParams m_p;
+  Relaxation m_relax{};
+  Vec3 m_box;
+  Vec3i m_n, m_pad;
+  std::size_t m_stride = 0;
+  double* m_f = nullptr;    ///< current populations, 19 * stride
+  double* m_next = nullptr; ///< update target
+  std::vector<double> m_field[3];
+  bool m_field_used = false;
+  std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)
+  std::vector<BoundarySpec> m_boundaries;
+  std::vector<Run> m_runs;
+  std::vector<Link> m_links;
+  std::size_t m_n_fluid = 0;
+  std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
+  Vec3 m_ext_lattice = Vec3::Zero();
+  double m_kT_lattice = 0.0;
+  std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
+  std::array<std::array<double, d3q19::Q>, d3q19::Q> m_basis{};
+  std::uint64_t m_updates = 0;
+  int m_threads = 1;
 };
 
-}  // namespace pyoif::lb
+} // namespace pyoif::lb

@@ -1,6 +1,191 @@
-// PLACEHOLDER: filled by the lb work.
+// Lattice-Boltzmann fluid, its boundaries and the particle coupling.
 #include "bindings.hpp"
 
+#include "lb/lb_coupling.hpp"
+#include "lb/lb_fluid.hpp"
+#include "system/system.hpp"
+#include "utils/errors.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <string>
+
+namespace py = pybind11;
+
 namespace pyoif::python {
-void bind_lb(pybind11::module_& /*m*/) {}
-}  // namespace pyoif::python
+
+namespace {
+
+using lb::LBFluid;
+using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+lb::Collision collision_of(const std::string& name) {
+  if (name == "MRT")
+    return lb::Collision::mrt;
+  if (name == "TRT")
+    return lb::Collision::trt;
+  if (name == "BGK")
+    return lb::Collision::bgk;
+  throw InputError("collision must be 'MRT', 'TRT' or 'BGK', got '" + name + "'");
+}
+
+/** Components per node of a property. */
+int components(const std::string& prop) {
+  if (prop == "velocity")
+    return 3;
+  if (prop == "density" || prop == "boundary")
+    return 1;
+  if (prop == "population")
+    return lb::d3q19::Q;
+  if (prop == "pressure_tensor")
+    return 9;
+  throw InputError("unknown lattice node property '" + prop + "'");
+}
+
+/** Values of property prop on the block lo <= (i, j, k) < hi, shape
+ *  (nx, ny, nz, components) flattened. */
+RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
+                    const Vec3i& hi) {
+  const int nc = components(prop);
+  const Vec3i n = hi - lo;
+  RealArray out({static_cast<py::ssize_t>(n[0]), static_cast<py::ssize_t>(n[1]),
+                 static_cast<py::ssize_t>(n[2]), static_cast<py::ssize_t>(nc)});
+  double* o = out.mutable_data();
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k) {
+        const Vec3i node(i, j, k);
+        if (prop == "velocity") {
+          const Vec3 u = fluid.node_velocity(node);
+          o[0] = u[0], o[1] = u[1], o[2] = u[2];
+        } else if (prop == "density") {
+          o[0] = fluid.node_density(node);
+        } else if (prop == "boundary") {
+          o[0] = fluid.node_boundary(node) + 1;
+        } else if (prop == "population") {
+          const auto f = fluid.node_populations(node);
+          std::copy(f.begin(), f.end(), o);
+        } else {
+          const lb::Mat3 p = fluid.node_pressure_tensor(node);
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              o[3 * a + b] = p(a, b);
+        }
+        o += nc;
+      }
+  return out;
+}
+
+void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+               const RealArray& values) {
+  const int nc = components(prop);
+  const Vec3i n = hi - lo;
+  if (values.size() != static_cast<py::ssize_t>(n.prod()) * nc)
+    throw InputError(prop + ": expected " + std::to_string(nc) + " value(s) per node for " +
+                     std::to_string(n.prod()) + " node(s), got " + std::to_string(values.size()));
+  const double* v = values.data();
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k) {
+        const Vec3i node(i, j, k);
+        if (prop == "velocity") {
+          fluid.set_node_density_velocity(node, fluid.node_density(node), Vec3(v[0], v[1], v[2]));
+        } else if (prop == "density") {
+          fluid.set_node_density_velocity(node, v[0], fluid.node_velocity(node));
+        } else if (prop == "population") {
+          lb::Populations f;
+          std::copy(v, v + nc, f.begin());
+          fluid.set_node_populations(node, f);
+        } else {
+          throw InputError(prop + " is read-only");
+        }
+        v += nc;
+      }
+}
+
+} // namespace
+
+void bind_lb(py::module_& m) {
+  py::class_<LBFluid, std::shared_ptr<LBFluid>>(m, "LBFluid")
+      .def(py::init([](double agrid, double tau, double dens, double visc, double bulk_visc,
+                       const Vec3& ext_force_density, double kT, std::uint64_t seed,
+                       const std::string& collision, int n_threads, const Vec3& box_l) {
+             lb::LBParams p;
+             p.agrid = agrid;
+             p.tau = tau;
+             p.density = dens;
+             p.viscosity = visc;
+             p.bulk_viscosity = bulk_visc;
+             p.ext_force_density = ext_force_density;
+             p.kT = kT;
+             p.seed = seed;
+             p.collision = collision_of(collision);
+             p.n_threads = n_threads;
+             return std::make_shared<LBFluid>(p, BoxGeometry(box_l, {true, true, true}));
+           }),
+           py::arg("agrid"), py::arg("tau"), py::arg("dens"), py::arg("visc"), py::arg("bulk_visc"),
+           py::arg("ext_force_density"), py::arg("kT"), py::arg("seed"), py::arg("collision"),
+           py::arg("n_threads"), py::arg("box_l"))
+      .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
+      .def_property_readonly("agrid", &LBFluid::agrid)
+      .def_property_readonly("tau", &LBFluid::tau)
+      .def_property_readonly("n_updates", &LBFluid::n_updates)
+      .def_property_readonly("n_fluid_nodes", &LBFluid::n_fluid_nodes)
+      .def_property_readonly("n_links", &LBFluid::n_links)
+      .def_property("n_threads", &LBFluid::n_threads, &LBFluid::set_n_threads)
+      .def_property_readonly("relaxation",
+                             [](const LBFluid& f) {
+                               const auto& r = f.relaxation();
+                               return py::dict(py::arg("shear") = r.shear, py::arg("bulk") = r.bulk,
+                                               py::arg("even") = r.even, py::arg("odd") = r.odd);
+                             })
+      .def("set_ext_force_density", &LBFluid::set_ext_force_density)
+      .def(
+          "step",
+          [](LBFluid& f, int n) {
+            if (n < 0)
+              throw InputError("steps must be >= 0");
+            py::gil_scoped_release release;
+            for (int i = 0; i < n; ++i)
+              f.step();
+          },
+          py::arg("n") = 1)
+      .def("total_mass", &LBFluid::total_mass)
+      .def("total_momentum", &LBFluid::total_momentum)
+      .def("set_boundaries",
+           [](LBFluid& f, const std::vector<std::pair<std::shared_ptr<shapes::Shape>, Vec3>>& b) {
+             std::vector<lb::BoundarySpec> specs;
+             for (const auto& [shape, vel] : b)
+               specs.push_back({shape, vel});
+             f.set_boundaries(specs);
+           })
+      .def("boundary_force", &LBFluid::boundary_force)
+      .def("get_block", &get_block)
+      .def("set_block", &set_block)
+      .def("write_vtk_velocity", &LBFluid::write_vtk_velocity)
+      .def("write_vtk_boundary", &LBFluid::write_vtk_boundary);
+
+  auto sys = py::reinterpret_borrow<py::class_<System, std::shared_ptr<System>>>(m.attr("System"));
+  sys.def(
+         "set_lb", [](System& s, std::shared_ptr<LBFluid> fluid) { s.set_lb(std::move(fluid)); },
+         py::arg("fluid").none(true))
+      .def("set_lb_coupling",
+           [](System& s, double gamma, std::uint64_t seed) {
+             if (!s.lb)
+               throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
+             if (!(gamma >= 0.0) || !std::isfinite(gamma))
+               throw InputError("gamma must be a finite number >= 0");
+             s.lb_coupling.active = true;
+             s.lb_coupling.params = {gamma, s.lb->params().kT, seed};
+           })
+      .def("set_lb_coupling_off", [](System& s) { s.lb_coupling.active = false; })
+      .def("lb_interpolated_velocity", [](const System& s, const Vec3& pos) -> Vec3 {
+        if (!s.lb)
+          throw InputError("no lattice-Boltzmann fluid is active");
+        return lb::interpolated_velocity(*s.lb, s.box, pos);
+      });
+}
+
+} // namespace pyoif::python

@@ -1,0 +1,76 @@
+#include "lb/lb_coupling.hpp"
+
+#include "utils/random.hpp"
+
+#include <array>
+#include <cmath>
+
+namespace pyoif::lb {
+
+namespace {
+
+/** The 8 nodes around pos and their trilinear weights. Node (i, j, k) sits at
+ *  ((i, j, k) + 1/2) agrid. */
+struct Stencil {
+  std::array<std::size_t, 8> node;
+  std::array<double, 8> weight;
+};
+
+Stencil stencil(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
+  const Vec3 p = box.folded(pos) / fluid.agrid() - Vec3::Constant(0.5);
+  int lo[3];
+  double frac[3];
+  for (int d = 0; d < 3; ++d) {
+    const double fl = std::floor(p[d]);
+    lo[d] = static_cast<int>(fl);
+    frac[d] = p[d] - fl;
+  }
+  Stencil s;
+  int m = 0;
+  for (int dx = 0; dx < 2; ++dx)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dz = 0; dz < 2; ++dz, ++m) {
+        s.node[m] = fluid.padded_index(lo[0] + dx, lo[1] + dy, lo[2] + dz);
+        s.weight[m] = (dx ? frac[0] : 1.0 - frac[0]) * (dy ? frac[1] : 1.0 - frac[1]) *
+                      (dz ? frac[2] : 1.0 - frac[2]);
+      }
+  return s;
+}
+
+} // namespace
+
+Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
+  const Stencil s = stencil(fluid, box, pos);
+  Vec3 u = Vec3::Zero();
+  for (int m = 0; m < 8; ++m)
+    u += s.weight[m] * fluid.velocity_at_index(s.node[m]);
+  return u;
+}
+
+void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
+                      const CouplingParams& params, std::uint64_t step, double time_step) {
+  if (params.gamma <= 0.0)
+    return;
+  const double noise =
+      params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
+  random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
+  auto& p = particles;
+  for (std::size_t i = 0; i < p.n_local(); ++i) {
+    const Stencil s = stencil(fluid, box, p.pos[i]);
+    Vec3 u = Vec3::Zero();
+    for (int m = 0; m < 8; ++m)
+      u += s.weight[m] * fluid.velocity_at_index(s.node[m]);
+    Vec3 f = params.gamma * (u - p.vel[i]);
+    if (noise > 0.0) {
+      key.key = static_cast<std::uint64_t>(p.id[i]);
+      for (int d = 0; d < 3; ++d)
+        f[d] += noise * random::normal(key, d);
+    }
+    p.force[i] += f;
+    // the fluid gets -F time_step of momentum per MD step, applied at its next update
+    for (int m = 0; m < 8; ++m)
+      fluid.add_impulse(s.node[m], -s.weight[m] * time_step * f);
+  }
+}
+
+} // namespace pyoif::lb

@@ -1,0 +1,481 @@
+// LBFluid: parameters, geometry (boundaries, fluid runs, bounce-back links),
+// node access, totals and output. The update kernel is in lb_kernel.cpp.
+#include "lb/lb_fluid.hpp"
+
+#include "io/vtk_legacy.hpp"
+#include "utils/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+
+#ifdef PYOIF_WITH_OPENMP
+#include <omp.h>
+#endif
+
+namespace pyoif::lb {
+
+using namespace d3q19;
+
+namespace {
+
+std::string fmt(double x) {
+  std::ostringstream s;
+  s.precision(10);
+  s << x;
+  return s.str();
+}
+
+void require(bool ok, const std::string& msg) {
+  if (!ok)
+    throw InputError(msg);
+}
+
+double* allocate(std::size_t n) {
+  const std::size_t bytes = ((n * sizeof(double) + 63) / 64) * 64;
+  void* p = std::aligned_alloc(64, bytes);
+  if (!p)
+    throw std::bad_alloc();
+  std::memset(p, 0, bytes);
+  return static_cast<double*>(p);
+}
+
+/** lambda = 1 - omega, with omega checked to lie in (0, 2). */
+double lambda_of(double omega, const std::string& what) {
+  require(std::isfinite(omega) && omega > 0.0 && omega < 2.0,
+          what + ": the relaxation rate " + fmt(omega) +
+              " lies outside the open range (0, 2); choose another value");
+  return 1.0 - omega;
+}
+
+/** Second-order equilibrium (Qian et al. 1992) of population q. */
+double equilibrium(int q, double rho, const Vec3& u) {
+  const double cu = c[q][0] * u[0] + c[q][1] * u[1] + c[q][2] * u[2];
+  return w[q] * rho * (1.0 + 3.0 * cu + 4.5 * cu * cu - 1.5 * u.squaredNorm());
+}
+
+} // namespace
+
+LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.length()) {
+  auto finite_positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  require(finite_positive(p.agrid), "agrid must be a finite number > 0, got " + fmt(p.agrid));
+  require(finite_positive(p.tau), "tau must be a finite number > 0, got " + fmt(p.tau));
+  require(finite_positive(p.density), "dens must be a finite number > 0, got " + fmt(p.density));
+  require(finite_positive(p.viscosity),
+          "visc must be a finite number > 0, got " + fmt(p.viscosity));
+  require(finite_positive(p.bulk_viscosity),
+          "bulk_visc must be a finite number > 0, got " + fmt(p.bulk_viscosity));
+  require(std::isfinite(p.kT) && p.kT >= 0.0, "kT must be a finite number >= 0, got " + fmt(p.kT));
+  require(p.ext_force_density.allFinite(), "ext_force_density must be finite");
+  require(p.n_threads >= 0, "n_threads must be >= 0 (0: OMP_NUM_THREADS or 1)");
+
+  for (int d = 0; d < 3; ++d) {
+    const double cells = m_box[d] / p.agrid;
+    const double rounded = std::round(cells);
+    require(rounded >= 1.0 && std::abs(cells - rounded) <= 1e-9 * std::max(1.0, rounded),
+            "agrid " + fmt(p.agrid) + " does not divide the box length " + fmt(m_box[d]) +
+                " on axis " + std::to_string(d) + " (box_l / agrid = " + fmt(cells) +
+                " must be a positive integer)");
+    m_n[d] = static_cast<int>(rounded);
+    m_pad[d] = m_n[d] + 2;
+  }
+
+  // Relaxation (Duenweg, Schiller & Ladd 2007, eqs. 40-41, in lattice units):
+  // nu = (1/omega_s - 1/2) / 3, nu_bulk = 2 (1/omega_b - 1/2) / 9.
+  const double nu = p.viscosity * p.tau / (p.agrid * p.agrid);
+  const double nu_b = p.bulk_viscosity * p.tau / (p.agrid * p.agrid);
+  const double omega_s = 1.0 / (3.0 * nu + 0.5);
+  m_relax.shear = lambda_of(omega_s, "visc (shear relaxation, visc * tau / agrid^2 = " + fmt(nu) +
+                                         " in lattice units)");
+  switch (p.collision) {
+  case Collision::mrt:
+    m_relax.bulk = lambda_of(2.0 / (9.0 * nu_b + 1.0), "bulk_visc (bulk relaxation)");
+    // ghost modes relaxed to equilibrium in one update (omega = 1)
+    m_relax.even = m_relax.odd = 0.0;
+    break;
+  case Collision::trt: {
+    // magic parameter Lambda = (1/omega+ - 1/2)(1/omega- - 1/2) = 3/16 puts the
+    // halfway bounce-back wall exactly midway for Poiseuille flow (Ginzburg,
+    // Verhaeghe & d'Humieres 2008)
+    m_relax.bulk = m_relax.even = m_relax.shear;
+    const double omega_minus = 1.0 / (0.5 + (3.0 / 16.0) / (1.0 / omega_s - 0.5));
+    m_relax.odd = lambda_of(omega_minus, "visc (TRT odd relaxation from the magic parameter)");
+    break;
+  }
+  case Collision::bgk:
+    m_relax.bulk = m_relax.even = m_relax.odd = m_relax.shear;
+    break;
+  }
+
+  m_ext_lattice = p.ext_force_density * p.tau * p.tau / p.agrid;
+  m_kT_lattice = p.kT * p.tau * p.tau / std::pow(p.agrid, 5);
+
+  // Orthogonal moment basis of Duenweg, Schiller & Ladd (2007), table I,
+  // Gram-Schmidt orthogonalised in the w-weighted scalar product: used for
+  // the thermal noise of the stress and ghost modes.
+  for (int q = 0; q < Q; ++q) {
+    const double x = c[q][0], y = c[q][1], z = c[q][2];
+    const double c2 = x * x + y * y + z * z;
+    const double e[Q] = {1.0,
+                         x,
+                         y,
+                         z,
+                         c2 - 1.0,
+                         x * x - y * y,
+                         c2 - 3.0 * z * z,
+                         x * y,
+                         x * z,
+                         y * z,
+                         (3.0 * c2 - 5.0) * x,
+                         (3.0 * c2 - 5.0) * y,
+                         (3.0 * c2 - 5.0) * z,
+                         (y * y - z * z) * x,
+                         (z * z - x * x) * y,
+                         (x * x - y * y) * z,
+                         3.0 * c2 * c2 - 6.0 * c2 + 1.0,
+                         (2.0 * c2 - 3.0) * (x * x - y * y),
+                         (2.0 * c2 - 3.0) * (c2 - 3.0 * z * z)};
+    for (int m = 0; m < Q; ++m)
+      m_basis[m][q] = e[m];
+  }
+  auto dot = [&](int a, int b) {
+    double s = 0.0;
+    for (int q = 0; q < Q; ++q)
+      s += w[q] * m_basis[a][q] * m_basis[b][q];
+    return s;
+  };
+  for (int m = 0; m < Q; ++m) {
+    for (int k = 0; k < m; ++k) {
+      const double proj = dot(m, k) / dot(k, k);
+      for (int q = 0; q < Q; ++q)
+        m_basis[m][q] -= proj * m_basis[k][q];
+    }
+    if (!(dot(m, m) > 1e-12))
+      throw std::logic_error("D3Q19 moment basis is degenerate");
+  }
+  for (int m = 4; m < Q; ++m) {
+    const double lambda = m == 4    ? m_relax.bulk
+                          : m <= 9  ? m_relax.shear
+                          : m <= 15 ? m_relax.odd
+                                    : m_relax.even;
+    // DSL eq. 66: variance mu b_m (1 - lambda^2), mu = rho kT / c_s^2 (lattice)
+    m_noise_factor[m] = 3.0 * m_kT_lattice * (1.0 - lambda * lambda) / dot(m, m);
+  }
+
+  for (int q = 0; q < Q; ++q)
+    m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][0]) * m_pad[1] + c[q][1]) * m_pad[2] + c[q][2];
+  const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
+  m_stride = ((nodes + 7) / 8) * 8;
+  m_f = allocate(Q * m_stride);
+  m_next = allocate(Q * m_stride);
+  m_flag.assign(nodes, 0);
+  set_n_threads(p.n_threads);
+  for (int x = 1; x <= m_n[0]; ++x)
+    for (int y = 1; y <= m_n[1]; ++y)
+      for (int z = 1; z <= m_n[2]; ++z)
+        for (int q = 0; q < Q; ++q)
+          m_f[q * m_stride + index(x, y, z)] = w[q] * p.density;
+  rebuild_geometry();
+}
+
+LBFluid::~LBFluid() {
+  std::free(m_f);
+  std::free(m_next);
+}
+
+void LBFluid::set_n_threads(int n) {
+  require(n >= 0, "n_threads must be >= 0, got " + std::to_string(n));
+  m_p.n_threads = n;
+#ifdef PYOIF_WITH_OPENMP
+  // Never oversubscribe by default (mpirun ranks share the cores): one thread
+  // unless the user asked for more via OMP_NUM_THREADS or n_threads.
+  if (n > 0)
+    m_threads = n;
+  else
+    m_threads = std::getenv("OMP_NUM_THREADS") ? omp_get_max_threads() : 1;
+#else
+  m_threads = 1;
+#endif
+}
+
+void LBFluid::set_ext_force_density(const Vec3& f) {
+  require(f.allFinite(), "ext_force_density must be finite");
+  m_p.ext_force_density = f;
+  m_ext_lattice = f * m_p.tau * m_p.tau / m_p.agrid;
+}
+
+void LBFluid::validate(const BoxGeometry& box, double time_step) const {
+  for (int d = 0; d < 3; ++d) {
+    const double cells = box.length()[d] / m_p.agrid;
+    require(std::abs(cells - std::round(cells)) <= 1e-9 * std::max(1.0, cells) && cells >= 0.5,
+            "agrid " + fmt(m_p.agrid) + " does not divide the box length " + fmt(box.length()[d]) +
+                " on axis " + std::to_string(d));
+    require(static_cast<int>(std::round(cells)) == m_n[d],
+            "box_l changed after the fluid was created (axis " + std::to_string(d) + ": " +
+                std::to_string(m_n[d]) + " nodes); remove and re-add the fluid");
+  }
+  require(std::isfinite(time_step) && time_step > 0.0,
+          "time_step must be > 0, got " + fmt(time_step));
+  const double ratio = m_p.tau / time_step;
+  require(std::round(ratio) >= 1.0 && std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio,
+          "tau " + fmt(m_p.tau) + " must be an integer multiple of the time_step " +
+              fmt(time_step) + " (tau / time_step = " + fmt(ratio) + ")");
+}
+
+void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
+  require(boundaries.size() < 65535, "too many lattice-Boltzmann boundaries");
+  for (const auto& b : boundaries) {
+    require(b.shape != nullptr, "LBBoundary: shape must be set");
+    require(b.velocity.allFinite(), "LBBoundary: velocity must be finite");
+  }
+  const std::vector<std::uint16_t> old_flag = m_flag;
+  m_boundaries = boundaries;
+  std::fill(m_flag.begin(), m_flag.end(), 0);
+  for (int x = 1; x <= m_n[0]; ++x)
+    for (int y = 1; y <= m_n[1]; ++y)
+      for (int z = 1; z <= m_n[2]; ++z) {
+        const Vec3 pos = (Vec3(x, y, z) - Vec3::Constant(0.5)) * m_p.agrid;
+        for (std::size_t b = 0; b < boundaries.size(); ++b)
+          if (boundaries[b].shape->is_inside(pos)) {
+            m_flag[index(x, y, z)] = static_cast<std::uint16_t>(b + 1);
+            break;
+          }
+      }
+  // nodes that became fluid start at rest at the reference density
+  for (int x = 1; x <= m_n[0]; ++x)
+    for (int y = 1; y <= m_n[1]; ++y)
+      for (int z = 1; z <= m_n[2]; ++z) {
+        const std::size_t n = index(x, y, z);
+        if (old_flag[n] != 0 && m_flag[n] == 0)
+          for (int q = 0; q < Q; ++q)
+            m_f[q * m_stride + n] = w[q] * m_p.density;
+        if (m_flag[n] != 0)
+          for (int q = 0; q < Q; ++q)
+            m_f[q * m_stride + n] = 0.0;
+      }
+  rebuild_geometry();
+}
+
+void LBFluid::rebuild_geometry() {
+  // ghost flags: periodic images of the domain's
+  for (int x = 0; x < m_pad[0]; ++x)
+    for (int y = 0; y < m_pad[1]; ++y)
+      for (int z = 0; z < m_pad[2]; ++z) {
+        const bool ghost = x == 0 || y == 0 || z == 0 || x == m_pad[0] - 1 || y == m_pad[1] - 1 ||
+                           z == m_pad[2] - 1;
+        if (ghost) {
+          auto wrap = [](int v, int n) { return v == 0 ? n : (v == n + 1 ? 1 : v); };
+          m_flag[index(x, y, z)] = m_flag[index(wrap(x, m_n[0]), wrap(y, m_n[1]), wrap(z, m_n[2]))];
+        }
+      }
+  m_runs.clear();
+  m_links.clear();
+  m_n_fluid = 0;
+  for (int x = 1; x <= m_n[0]; ++x)
+    for (int y = 1; y <= m_n[1]; ++y) {
+      int z = 1;
+      while (z <= m_n[2]) {
+        if (m_flag[index(x, y, z)] != 0) {
+          ++z;
+          continue;
+        }
+        const int start = z;
+        while (z <= m_n[2] && m_flag[index(x, y, z)] == 0)
+          ++z;
+        m_runs.push_back({index(x, y, start), z - start});
+        m_n_fluid += static_cast<std::size_t>(z - start);
+        for (int zz = start; zz < z; ++zz) {
+          const std::size_t n = index(x, y, zz);
+          for (int q = 1; q < Q; ++q) {
+            const std::size_t s = n + m_offset[q];
+            if (m_flag[s] == 0)
+              continue;
+            const int b = m_flag[s] - 1;
+            const Vec3 u_wall = m_boundaries[b].velocity * m_p.tau / m_p.agrid;
+            const double cu = c[q][0] * u_wall[0] + c[q][1] * u_wall[1] + c[q][2] * u_wall[2];
+            m_links.push_back({n, s, q, b, 6.0 * w[q] * m_p.density * cu});
+          }
+        }
+      }
+    }
+  for (auto& f : m_field)
+    f.clear();
+  m_field_used = false;
+}
+
+Vec3 LBFluid::boundary_force(int b) const {
+  require(b >= 0 && b < static_cast<int>(m_boundaries.size()),
+          "boundary index " + std::to_string(b) + " out of range");
+  // Momentum exchange of the last streaming (Ladd 1994): the population
+  // f_q* sent towards the wall came back as f_{-q} = f_q* - wall_term, so the
+  // wall received c_q (f_q* + f_{-q}) = c_q (2 f_{-q} + wall_term).
+  Vec3 sum = Vec3::Zero();
+  for (const Link& l : m_links) {
+    if (l.boundary != b)
+      continue;
+    const double back = m_f[opposite(l.q) * m_stride + l.node];
+    const double transfer = 2.0 * back + l.wall_term;
+    for (int d = 0; d < 3; ++d)
+      sum[d] += c[l.q][d] * transfer;
+  }
+  return sum * std::pow(m_p.agrid, 4) / (m_p.tau * m_p.tau);
+}
+
+std::size_t LBFluid::checked_node(const Vec3i& node) const {
+  for (int d = 0; d < 3; ++d)
+    if (node[d] < 0 || node[d] >= m_n[d])
+      throw InputError("lattice node index " + std::to_string(node[d]) + " on axis " +
+                       std::to_string(d) + " out of range [0, " + std::to_string(m_n[d]) + ")");
+  return index(node[0] + 1, node[1] + 1, node[2] + 1);
+}
+
+std::size_t LBFluid::padded_index(int i, int j, int k) const {
+  auto wrap = [](int v, int n) { return ((v % n) + n) % n; };
+  return index(wrap(i, m_n[0]) + 1, wrap(j, m_n[1]) + 1, wrap(k, m_n[2]) + 1);
+}
+
+void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
+  rho = 0.0;
+  j.setZero();
+  for (int q = 0; q < Q; ++q) {
+    const double f = m_f[q * m_stride + n];
+    rho += f;
+    for (int d = 0; d < 3; ++d)
+      j[d] += c[q][d] * f;
+  }
+}
+
+int LBFluid::node_boundary(const Vec3i& node) const {
+  return static_cast<int>(m_flag[checked_node(node)]) - 1;
+}
+
+double LBFluid::node_density(const Vec3i& node) const {
+  const std::size_t n = checked_node(node);
+  if (m_flag[n])
+    return m_p.density;
+  double rho;
+  Vec3 j;
+  moments(n, rho, j);
+  return rho;
+}
+
+Vec3 LBFluid::velocity_at_index(std::size_t n) const {
+  if (m_flag[n])
+    return m_boundaries[m_flag[n] - 1].velocity;
+  double rho;
+  Vec3 j;
+  moments(n, rho, j);
+  return (j + 0.5 * m_ext_lattice) / rho * (m_p.agrid / m_p.tau);
+}
+
+Vec3 LBFluid::node_velocity(const Vec3i& node) const {
+  return velocity_at_index(checked_node(node));
+}
+
+Populations LBFluid::node_populations(const Vec3i& node) const {
+  const std::size_t n = checked_node(node);
+  Populations f;
+  for (int q = 0; q < Q; ++q)
+    f[q] = m_f[q * m_stride + n];
+  return f;
+}
+
+Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
+  const std::size_t n = checked_node(node);
+  Mat3 pi = Mat3::Zero();
+  for (int q = 0; q < Q; ++q)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        pi(a, b) += c[q][a] * c[q][b] * m_f[q * m_stride + n];
+  const double scale = m_p.agrid * m_p.agrid / (m_p.tau * m_p.tau);
+  return pi * scale;
+}
+
+void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
+  const std::size_t n = checked_node(node);
+  require(m_flag[n] == 0, "cannot set the populations of a boundary node");
+  for (int q = 0; q < Q; ++q) {
+    require(std::isfinite(f[q]), "population: values must be finite");
+    m_f[q * m_stride + n] = f[q];
+  }
+}
+
+void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
+  const std::size_t n = checked_node(node);
+  require(m_flag[n] == 0, "cannot set the density or velocity of a boundary node");
+  require(std::isfinite(rho) && rho > 0.0, "density must be a finite number > 0");
+  require(u.allFinite(), "velocity must be finite");
+  // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
+  const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
+  for (int q = 0; q < Q; ++q)
+    m_f[q * m_stride + n] = equilibrium(q, rho, u_lattice);
+}
+
+void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
+  if (m_field[0].empty())
+    for (auto& f : m_field)
+      f.assign(m_stride, 0.0);
+  m_field_used = true;
+  // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
+  const double scale = m_p.tau / std::pow(m_p.agrid, 4);
+  for (int d = 0; d < 3; ++d)
+    m_field[d][n] += impulse[d] * scale;
+}
+
+double LBFluid::total_mass() const {
+  double mass = 0.0;
+  for (const Run& r : m_runs)
+    for (int q = 0; q < Q; ++q) {
+      const double* f = m_f + q * m_stride + r.start;
+      for (int i = 0; i < r.length; ++i)
+        mass += f[i];
+    }
+  return mass * std::pow(m_p.agrid, 3);
+}
+
+Vec3 LBFluid::total_momentum() const {
+  Vec3 j = Vec3::Zero();
+  for (const Run& r : m_runs) {
+    for (int q = 1; q < Q; ++q) {
+      const double* f = m_f + q * m_stride + r.start;
+      double s = 0.0;
+      for (int i = 0; i < r.length; ++i)
+        s += f[i];
+      for (int d = 0; d < 3; ++d)
+        j[d] += c[q][d] * s;
+    }
+    if (m_field_used)
+      for (int d = 0; d < 3; ++d)
+        for (int i = 0; i < r.length; ++i)
+          j[d] += m_field[d][r.start + i];
+  }
+  return j * std::pow(m_p.agrid, 4) / m_p.tau;
+}
+
+void LBFluid::write_vtk_velocity(const std::string& path) const {
+  std::vector<double> data;
+  data.reserve(3 * static_cast<std::size_t>(m_n.prod()));
+  for (int k = 0; k < m_n[2]; ++k)
+    for (int j = 0; j < m_n[1]; ++j)
+      for (int i = 0; i < m_n[0]; ++i) {
+        const Vec3 u = velocity_at_index(index(i + 1, j + 1, k + 1));
+        data.insert(data.end(), {u[0], u[1], u[2]});
+      }
+  io::write_vtk_structured_points(path, m_n, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid, "velocity",
+                                  3, data);
+}
+
+void LBFluid::write_vtk_boundary(const std::string& path) const {
+  std::vector<double> data;
+  data.reserve(static_cast<std::size_t>(m_n.prod()));
+  for (int k = 0; k < m_n[2]; ++k)
+    for (int j = 0; j < m_n[1]; ++j)
+      for (int i = 0; i < m_n[0]; ++i)
+        data.push_back(m_flag[index(i + 1, j + 1, k + 1)]);
+  io::write_vtk_structured_points(path, m_n, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid, "boundary",
+                                  1, data);
+}
+
+} // namespace pyoif::lb

@@ -1,0 +1,302 @@
+// The lattice update: fused collide-and-push over runs of fluid nodes, halo
+// exchange, halfway bounce-back. This is where a PyOIF run spends its time.
+//
+// Collision in population space, equivalent to the moment-space MRT of
+// Duenweg, Schiller & Ladd, Phys. Rev. E 76, 036704 (2007) (DSL) with
+// Guo-type forcing (DSL sec. III.E; Guo, Zheng & Shi, PRE 65, 046308 (2002)):
+// with u = (j + F/2) / rho, Pi the second moment and
+//   n+ = even part of f - f_eq,  n- = odd part of f - f_eq(j),
+// the post-collision populations are
+//   f+* = f_eq+ + l_e n+ + w/(2 c_s^4) H:B,   H = c c - c_s^2 I,
+//   B   = (l_s - l_e) Pi_neq,dev + (l_b - l_e) Pi_neq,iso + S,
+//   S   = (1 + l_s)/2 (uF + Fu)_dev + (1 + l_b)/2 (uF + Fu)_iso,
+//   f-* = l_o n- + w c.((1 - l_o) j + F) / c_s^2 ... i.e. j* = j + F,
+// l = 1 - omega of the shear, bulk, even-ghost and odd-ghost modes. The
+// Hermite projection w/(2 c_s^4) H:A is the w-orthogonal projection on the
+// stress modes, so this relaxes each DSL mode group at its own rate while
+// costing about as much as BGK. It is written per opposite pair (q, q+1):
+// f+ = (f_q + f_q+1)/2 and f- = (f_q - f_q+1)/2.
+#include "lb/lb_fluid.hpp"
+
+#include "utils/errors.hpp"
+#include "utils/random.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace pyoif::lb {
+
+using namespace d3q19;
+
+namespace {
+
+/** Speed limit: |u| >= c_s (lattice) means the run has left the model's range. */
+constexpr double u2_limit = 1.0 / 3.0;
+
+struct NodeResult {
+  double rho, u2;
+};
+
+/** Collision of one node; f in, out post-collision (same q order). */
+__attribute__((always_inline)) inline NodeResult collide(const double* f, const double* F,
+                                                         const Relaxation& l, double* out) {
+  double s[n_pairs], d[n_pairs];
+#pragma GCC unroll 9
+  for (int k = 0; k < n_pairs; ++k) {
+    s[k] = f[2 * k + 1] + f[2 * k + 2];
+    d[k] = f[2 * k + 1] - f[2 * k + 2];
+  }
+  double rho = f[0], j[3] = {0.0, 0.0, 0.0};
+  double pi_xx = 0.0, pi_yy = 0.0, pi_zz = 0.0, pi_xy = 0.0, pi_xz = 0.0, pi_yz = 0.0;
+#pragma GCC unroll 9
+  for (int k = 0; k < n_pairs; ++k) {
+    const auto& ck = c[2 * k + 1];
+    rho += s[k];
+    j[0] += ck[0] * d[k];
+    j[1] += ck[1] * d[k];
+    j[2] += ck[2] * d[k];
+    pi_xx += ck[0] * ck[0] * s[k];
+    pi_yy += ck[1] * ck[1] * s[k];
+    pi_zz += ck[2] * ck[2] * s[k];
+    pi_xy += ck[0] * ck[1] * s[k];
+    pi_xz += ck[0] * ck[2] * s[k];
+    pi_yz += ck[1] * ck[2] * s[k];
+  }
+  const double inv_rho = 1.0 / rho;
+  const double u[3] = {(j[0] + 0.5 * F[0]) * inv_rho, (j[1] + 0.5 * F[1]) * inv_rho,
+                       (j[2] + 0.5 * F[2]) * inv_rho};
+  const double u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+  // non-equilibrium stress: Pi - rho c_s^2 I - rho u u
+  const double third_rho = rho * (1.0 / 3.0);
+  const double n_xx = pi_xx - third_rho - rho * u[0] * u[0];
+  const double n_yy = pi_yy - third_rho - rho * u[1] * u[1];
+  const double n_zz = pi_zz - third_rho - rho * u[2] * u[2];
+  const double n_xy = pi_xy - rho * u[0] * u[1];
+  const double n_xz = pi_xz - rho * u[0] * u[2];
+  const double n_yz = pi_yz - rho * u[1] * u[2];
+  const double n_iso = (n_xx + n_yy + n_zz) * (1.0 / 3.0);
+  const double uf_iso = (2.0 / 3.0) * (u[0] * F[0] + u[1] * F[1] + u[2] * F[2]);
+  const double shear_src = 0.5 * (1.0 + l.shear), bulk_src = 0.5 * (1.0 + l.bulk);
+  const double ds = l.shear - l.even, db = l.bulk - l.even;
+  const double iso = db * n_iso + bulk_src * uf_iso;
+  const double b_xx = ds * (n_xx - n_iso) + shear_src * (2.0 * u[0] * F[0] - uf_iso) + iso;
+  const double b_yy = ds * (n_yy - n_iso) + shear_src * (2.0 * u[1] * F[1] - uf_iso) + iso;
+  const double b_zz = ds * (n_zz - n_iso) + shear_src * (2.0 * u[2] * F[2] - uf_iso) + iso;
+  const double b_xy = ds * n_xy + shear_src * (u[0] * F[1] + u[1] * F[0]);
+  const double b_xz = ds * n_xz + shear_src * (u[0] * F[2] + u[2] * F[0]);
+  const double b_yz = ds * n_yz + shear_src * (u[1] * F[2] + u[2] * F[1]);
+  const double tr_b_third = (b_xx + b_yy + b_zz) * (1.0 / 3.0);
+  const double one_minus_le = 1.0 - l.even;
+  const double jj[3] = {(1.0 - l.odd) * j[0] + F[0], (1.0 - l.odd) * j[1] + F[1],
+                        (1.0 - l.odd) * j[2] + F[2]};
+  const double eq_common = 1.0 - 1.5 * u2;
+  out[0] = one_minus_le * w[0] * rho * eq_common + l.even * f[0] - w[0] * 4.5 * tr_b_third;
+#pragma GCC unroll 9
+  for (int k = 0; k < n_pairs; ++k) {
+    const auto& ck = c[2 * k + 1];
+    const double wk = w[2 * k + 1];
+    const double cu = ck[0] * u[0] + ck[1] * u[1] + ck[2] * u[2];
+    const double cbc = ck[0] * ck[0] * b_xx + ck[1] * ck[1] * b_yy + ck[2] * ck[2] * b_zz +
+                       2.0 * (ck[0] * ck[1] * b_xy + ck[0] * ck[2] * b_xz + ck[1] * ck[2] * b_yz);
+    const double even = one_minus_le * wk * rho * (eq_common + 4.5 * cu * cu) +
+                        0.5 * l.even * s[k] + wk * 4.5 * (cbc - tr_b_third);
+    const double odd =
+        0.5 * l.odd * d[k] + 3.0 * wk * (ck[0] * jj[0] + ck[1] * jj[1] + ck[2] * jj[2]);
+    out[2 * k + 1] = even + odd;
+    out[2 * k + 2] = even - odd;
+  }
+  return {rho, u2};
+}
+
+} // namespace
+
+template <bool thermal, bool with_field>
+bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __restrict dst) const {
+  const std::size_t S = m_stride;
+  const Relaxation l = m_relax;
+  const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
+  const double* __restrict gx = with_field ? m_field[0].data() : nullptr;
+  const double* __restrict gy = with_field ? m_field[1].data() : nullptr;
+  const double* __restrict gz = with_field ? m_field[2].data() : nullptr;
+  std::ptrdiff_t off[Q];
+  for (int q = 0; q < Q; ++q)
+    off[q] = static_cast<std::ptrdiff_t>(q * S) + m_offset[q];
+  const std::size_t begin = r.start, end = r.start + r.length;
+  int bad = 0;
+  if constexpr (!thermal) {
+#pragma GCC ivdep
+    for (std::size_t n = begin; n < end; ++n) {
+      double f[Q], out[Q];
+#pragma GCC unroll 19
+      for (int q = 0; q < Q; ++q)
+        f[q] = src[q * S + n];
+      double F[3] = {fx, fy, fz};
+      if constexpr (with_field) {
+        F[0] += gx[n];
+        F[1] += gy[n];
+        F[2] += gz[n];
+      }
+      const NodeResult res = collide(f, F, l, out);
+#pragma GCC unroll 19
+      for (int q = 0; q < Q; ++q)
+        dst[off[q] + n] = out[q];
+      bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+    }
+  } else {
+    const std::uint64_t counter = m_updates;
+    for (std::size_t n = begin; n < end; ++n) {
+      double f[Q], out[Q];
+      for (int q = 0; q < Q; ++q)
+        f[q] = src[q * S + n];
+      double F[3] = {fx, fy, fz};
+      if constexpr (with_field) {
+        F[0] += gx[n];
+        F[1] += gy[n];
+        F[2] += gz[n];
+      }
+      const NodeResult res = collide(f, F, l, out);
+      bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+      // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
+      // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
+      // the w-weighted basis; mass and momentum untouched
+      const int z = static_cast<int>(n % m_pad[2]) - 1;
+      const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
+      const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
+      const random::Key key{m_p.seed, static_cast<std::uint64_t>(random::Stream::lb_fluid), counter,
+                            (static_cast<std::uint64_t>(x) * m_n[1] + y) * m_n[2] + z};
+      const double rho_pos = res.rho > 0.0 ? res.rho : 0.0;
+      double amp[Q];
+      for (int m = 4; m < Q; ++m)
+        amp[m] = std::sqrt(rho_pos * m_noise_factor[m]) * random::normal(key, m);
+      for (int q = 0; q < Q; ++q) {
+        double sum = 0.0;
+        for (int m = 4; m < Q; ++m)
+          sum += m_basis[m][q] * amp[m];
+        out[q] += w[q] * sum;
+      }
+      for (int q = 0; q < Q; ++q)
+        dst[off[q] + n] = out[q];
+    }
+  }
+  return bad != 0;
+}
+
+void LBFluid::halo_exchange(double* f) const {
+  // Push streaming put the populations that left the domain into the ghost
+  // layer; fold them into the periodic image. Region o (26 of them) gets the
+  // populations whose velocity points into it: c_d = o_d wherever o_d != 0.
+  for (int ox = -1; ox <= 1; ++ox)
+    for (int oy = -1; oy <= 1; ++oy)
+      for (int oz = -1; oz <= 1; ++oz) {
+        if (ox == 0 && oy == 0 && oz == 0)
+          continue;
+        const int o[3] = {ox, oy, oz};
+        int lo[3], hi[3], shift[3];
+        for (int d = 0; d < 3; ++d) {
+          if (o[d] == 0) {
+            lo[d] = 1;
+            hi[d] = m_n[d];
+            shift[d] = 0;
+          } else {
+            lo[d] = hi[d] = o[d] < 0 ? 0 : m_n[d] + 1;
+            shift[d] = o[d] < 0 ? m_n[d] : -m_n[d];
+          }
+        }
+        const std::ptrdiff_t delta =
+            (static_cast<std::ptrdiff_t>(shift[0]) * m_pad[1] + shift[1]) * m_pad[2] + shift[2];
+        for (int q = 1; q < Q; ++q) {
+          bool moves_in = true;
+          for (int d = 0; d < 3; ++d)
+            if (o[d] != 0 && c[q][d] != o[d])
+              moves_in = false;
+          if (!moves_in)
+            continue;
+          // along an axis the region spans (o_d = 0), only ghosts whose
+          // pushing node g - c_q lies in the domain hold a population; the
+          // others belong to a neighbouring edge or corner region
+          int qlo[3], qhi[3];
+          for (int d = 0; d < 3; ++d) {
+            qlo[d] = o[d] == 0 ? std::max(lo[d], 1 + c[q][d]) : lo[d];
+            qhi[d] = o[d] == 0 ? std::min(hi[d], m_n[d] + c[q][d]) : hi[d];
+          }
+          double* fq = f + q * m_stride;
+          for (int x = qlo[0]; x <= qhi[0]; ++x)
+            for (int y = qlo[1]; y <= qhi[1]; ++y) {
+              const std::size_t base = index(x, y, qlo[2]);
+              const int len = qhi[2] - qlo[2] + 1;
+              for (int z = 0; z < len; ++z)
+                fq[base + z + delta] = fq[base + z];
+            }
+        }
+      }
+}
+
+void LBFluid::apply_bounce_back(double* f) const {
+  // The kernel pushed f_q* of a fluid node into the (unused) slot of its solid
+  // neighbour; send it back as f_{-q} (halfway bounce-back, Ladd 1994), with
+  // the moving-wall term -6 w_q rho0 c_q . u_wall.
+  for (const Link& l : m_links)
+    f[opposite(l.q) * m_stride + l.node] = f[l.q * m_stride + l.solid] - l.wall_term;
+}
+
+void LBFluid::report_instability(const Run& r) const {
+  for (int i = 0; i < r.length; ++i) {
+    const std::size_t n = r.start + i;
+    double rho;
+    Vec3 j;
+    moments(n, rho, j);
+    const Vec3 u = (j + 0.5 * m_ext_lattice) / rho;
+    if (rho > 0.0 && u.squaredNorm() < u2_limit)
+      continue;
+    const int z = static_cast<int>(n % m_pad[2]) - 1;
+    const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
+    const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
+    std::ostringstream msg;
+    msg << "lattice-Boltzmann fluid unstable at node (" << x << ", " << y << ", " << z
+        << ") in lattice update " << m_updates << ": density " << rho
+        << ", speed |u| = " << u.norm()
+        << " lattice units (must stay well below the lattice sound speed 0.577); reduce the "
+           "forces or flow speed, or increase visc (relaxation rate "
+        << 1.0 - m_relax.shear << ")";
+    throw SimulationInstability(msg.str());
+  }
+  throw SimulationInstability("lattice-Boltzmann fluid unstable in lattice update " +
+                              std::to_string(m_updates));
+}
+
+void LBFluid::step() {
+  const bool thermal = m_kT_lattice > 0.0;
+  const bool field = m_field_used;
+  const long n_runs = static_cast<long>(m_runs.size());
+  long first_bad = n_runs;
+  const double* src = m_f;
+  double* dst = m_next;
+#ifdef PYOIF_WITH_OPENMP
+#pragma omp parallel for schedule(static) num_threads(m_threads) reduction(min : first_bad)
+#endif
+  for (long i = 0; i < n_runs; ++i) {
+    bool bad;
+    if (thermal)
+      bad = field ? update_run<true, true>(m_runs[i], src, dst)
+                  : update_run<true, false>(m_runs[i], src, dst);
+    else
+      bad = field ? update_run<false, true>(m_runs[i], src, dst)
+                  : update_run<false, false>(m_runs[i], src, dst);
+    if (bad && i < first_bad)
+      first_bad = i;
+  }
+  if (first_bad < n_runs)
+    report_instability(m_runs[first_bad]); // src is still the pre-collision state
+  halo_exchange(dst);
+  apply_bounce_back(dst);
+  std::swap(m_f, m_next);
+  if (field) {
+    for (auto& g : m_field)
+      std::fill(g.begin(), g.end(), 0.0);
+    m_field_used = false;
+  }
+  ++m_updates;
+}
+
+} // namespace pyoif::lb
