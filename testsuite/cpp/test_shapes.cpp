@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -295,6 +296,7 @@ TEST(Shapes, RandomPointsNormalIsUnitAndClosestPointOnSurface) {
       const auto on = eval(*cs.shape, closest);
       ASSERT_LT(std::abs(on.dist), 1e-10) << "pos " << pos.transpose() << " dist " << r.dist;
     }
+    std::printf("%-16s %d of 4000 random points inside\n", cs.label, inside);
     // Both signs must be sampled, or the checks above prove little.
     EXPECT_GT(inside, 40);
     EXPECT_LT(inside, 3960);
@@ -316,6 +318,7 @@ TEST(Shapes, RandomPointsDistanceIsOneLipschitz) {
       const double ratio = std::abs(dx - dy) / (x - y).norm();
       worst = std::max(worst, ratio);
     }
+    std::printf("%-16s largest |d(x) - d(y)| / |x - y| = %.12f\n", cs.label, worst);
     EXPECT_LE(worst, 1.0 + 1e-9);
     // Exact distances attain slope 1 (along a normal); a squashed one would not.
     EXPECT_GT(worst, 0.99);
