@@ -30,7 +30,7 @@ class TestRelaxation(unittest.TestCase):
         self.system.cell_system.skin = 0.5
 
     def make_cell(self, mesh="rbc374", **moduli):
-        kw = dict(ks=0.05, kb=0.02, kal=0.05, kag=0.5, kv=0.9)
+        kw = dict(ks=0.05, kb=0.15, kal=0.05, kag=0.5, kv=0.9)
         kw.update(moduli)
         ct = oif.OifCellType(*oif.mesh_files(mesh), system=self.system, resize=(R, R, R), **kw)
         cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[15.0, 15.0, 15.0], rotate=(0.4, -0.3, 1.2))
@@ -67,13 +67,13 @@ class TestRelaxation(unittest.TestCase):
         metric = cell.elastic_forces(f_metric=(1, 1, 1, 1, 1, 1))
         self.assertAlmostEqual(metric[5], np.linalg.norm(f, axis=1).sum(), places=10)
 
-    def relax(self, cell, ct, deform, steps=3000):
+    def relax(self, cell, ct, deform, steps=4000):
         p = cell.particles
         ref = p.pos.copy()
         c = ref.mean(axis=0)
         p.pos = deform(ref - c) + c
         rmsd0 = kabsch_rmsd(p.pos, ref)
-        self.system.thermostat.set_langevin(kT=0.0, gamma=0.5)
+        self.system.thermostat.set_langevin(kT=0.0, gamma=0.3)
         volumes = []
         for _ in range(steps // 100):
             self.system.integrator.run(100)
