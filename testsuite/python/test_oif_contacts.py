@@ -39,13 +39,13 @@ class TestContacts(unittest.TestCase):
     def two_cells(self, collide):
         s = self.make_system()
         ct = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(R, R, R), ks=0.05, kb=0.02,
-                             kal=0.05, kag=0.5, kv=0.9, normal=True)
+                             kal=0.05, kag=0.5, kv=3.0, normal=True)
         # one particle type for both: contacts act through the cells' ids
         c1 = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0 - R - 0.6, 15.0, 15.0])
         c2 = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0 + R + 0.6, 15.3, 15.2])
         if collide:
             s.non_bonded_inter[0, 0].membrane_collision.set_params(a=0.2, n=4.0, cutoff=1.0, offset=0.0)
-        push = 0.4 / ct.mesh.get_n_nodes()  # total 0.4 on each cell, towards the other
+        push = 1.0 / ct.mesh.get_n_nodes()  # total 1.0 on each cell, towards the other
         c1.set_force([push, 0.0, 0.0])
         c2.set_force([-push, 0.0, 0.0])
         return s, ct, c1, c2
@@ -77,13 +77,13 @@ class TestContacts(unittest.TestCase):
     def wall_cell(self, repel):
         s = self.make_system()
         ct = oif.OifCellType(*oif.mesh_files("rbc162"), system=s, resize=(R, R, R), ks=0.05, kb=0.02,
-                             kal=0.05, kag=0.5, kv=0.9)
+                             kal=0.05, kag=0.5, kv=3.0)
         cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 5.0], rotate=(0.3, 0.2, 0.0))
         wall = lbmd.shapes.Wall(normal=[0, 0, 1], dist=2.0)
         s.constraints.add(shape=wall, particle_type=10, penetrable=not repel)
         if repel:
             s.non_bonded_inter[0, 10].soft_sphere.set_params(a=0.002, n=1.5, cutoff=0.8, offset=0.0)
-        cell.set_force([0.0, 0.0, -0.5 / ct.mesh.get_n_nodes()])
+        cell.set_force([0.0, 0.0, -1.0 / ct.mesh.get_n_nodes()])
         return s, ct, cell
 
     def test_cell_against_wall(self):
@@ -113,7 +113,10 @@ class TestContacts(unittest.TestCase):
                            self_cell_cutoff=cut)
         s.integrator.run(0, recalc_forces=True)
         self.assertLess(np.abs(cell.particles.f).max(), 1e-12)
-        s.part.clear()
+        # control: excluding only the first neighbours, the soft sphere acts in the relaxed cell
+        s = self.make_system()
+        ct = oif.OifCellType(*oif.mesh_files("rbc162"), system=s, resize=(R, R, R), ks=0.05)
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=0.001, n=1.5, cutoff=cut, offset=0.0)
         cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0], exclusion_neighbours=1)
         s.integrator.run(0, recalc_forces=True)
         self.assertGreater(np.abs(cell.particles.f).max(), 1e-6)
