@@ -42,7 +42,7 @@ RELAXATION_SCRIPT = textwrap.dedent("""
         system.integrator.run(1)
         assert np.allclose(np.sum(parts.f, axis=0), 0., atol=1e-10)
         torque = np.zeros(3)
-        for p in system.part:
+        for p in system.part.all():
             torque += np.cross(p.pos, p.f)
         assert np.allclose(torque, 0., atol=1e-10), torque
         system.thermostat.set_langevin(kT=0, gamma=0.7, seed=42)
