@@ -173,7 +173,7 @@ class OifLocalForces(BondedInteraction):
                Param("ks", "float", 0.0, check=non_negative, doc="neo-Hookean stretching"),
                Param("kslin", "float", 0.0, check=non_negative, doc="linear stretching"),
                Param("phi0", "float", 0.0,
-                     check=(lambda x: 0.0 <= x < _TWO_PI, "in [0, 2 pi)"),
+                     check=(lambda x: 0.0 <= x <= _TWO_PI, "in [0, 2 pi]"),
                      doc="relaxed angle between the triangles"),
                Param("kb", "float", 0.0, check=non_negative, doc="bending"),
                Param("A01", "float", 0.0, check=non_negative, doc="relaxed area of ABC"),

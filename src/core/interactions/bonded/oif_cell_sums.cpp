@@ -51,12 +51,15 @@ void CellSums::compute(const BondGroup& group, const ParticleStore& p, const Box
     const int i0 = local_index(p, ids[0]);
     const long k = static_cast<long>(p.mol_id[i0]) - lo;
     bond_cell[b] = static_cast<int>(k);
+    const Vec3 x0 = box.unfolded(p.pos[i0], p.image[i0]);
     if (!has_reference[k]) {
-      reference[k] = p.pos[i0];
+      reference[k] = x0;
       has_reference[k] = 1;
     }
-    // vertices relative to the cell's reference point, minimum image
-    const Vec3 a = box.minimum_image(p.pos[i0], reference[k]);
+    // the first vertex relative to the cell's reference point in unfolded
+    // coordinates (continuous along the trajectory, exact for a cell of any
+    // size); the other two by the minimum image across the short edges
+    const Vec3 a = x0 - reference[k];
     const Vec3 bb = a + box.minimum_image(p.pos[local_index(p, ids[1])], p.pos[i0]);
     const Vec3 c = a + box.minimum_image(p.pos[local_index(p, ids[2])], p.pos[i0]);
     sums[k] += triangle_area(a, bb, c);

@@ -22,10 +22,13 @@ struct CellSums {
   std::vector<double> n_triangles; ///< per slot
 
   /** Recompute from the current positions. Volumes are exact for a closed mesh
-   *  in a periodic box as long as the cell spans less than half the box: every
-   *  vertex is taken relative to the cell's reference point (the first node of
-   *  its first triangle) by the minimum image. Throws SimulationInstability if
-   *  a bond refers to a missing particle. */
+   *  in a periodic box, also for cells crossing the boundary and cells larger
+   *  than half the box: each triangle's first vertex is taken relative to the
+   *  cell's reference point (the first node of its first triangle) in unfolded
+   *  coordinates (position + image count, continuous along the trajectory),
+   *  its other vertices by the minimum image across its edges. (A pure
+   *  minimum-image chain would need the cell to span less than half the box.)
+   *  Throws SimulationInstability if a bond refers to a missing particle. */
   void compute(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
                const Communicator& comm);
   /** Slot of a mol_id, -1 if the group has no triangle of that cell. */

@@ -62,13 +62,14 @@ struct OifLocalForces {
   static void check_reference(const double* ref, std::size_t bond) {
     static const char* names[4] = {"r0", "phi0", "A01", "A02"};
     for (int k = 0; k < 4; ++k) {
-      const bool ok =
-          std::isfinite(ref[k]) && (k == 1 ? (ref[k] >= 0.0 && ref[k] < 2.0 * M_PI) : ref[k] > 0.0);
+      const bool ok = std::isfinite(ref[k]) &&
+                      (k == 1 ? (ref[k] >= -2.0 * M_PI && ref[k] <= 4.0 * M_PI) : ref[k] > 0.0);
       if (!ok)
-        throw InputError(std::string("OifLocalForces per-bond value '") + names[k] + "' of bond " +
-                         std::to_string(bond) + " must be " +
-                         (k == 1 ? "in [0, 2 pi)" : "a finite number > 0") + ", got " +
-                         std::to_string(ref[k]));
+        throw InputError(
+            std::string("OifLocalForces per-bond value '") + names[k] + "' of bond " +
+            std::to_string(bond) + " must be " +
+            (k == 1 ? "in [-2 pi, 4 pi] (it is taken modulo 2 pi)" : "a finite number > 0") +
+            ", got " + std::to_string(ref[k]));
     }
   }
 

@@ -1,0 +1,322 @@
+// Force = -grad(energy), checked numerically for every interaction that has an
+// energy, by one table-driven test (HOOMD's test_force_energy_relationship):
+// random configurations, central differences with step h = 1e-5 (in units of
+// the configuration's length scale), along every coordinate, and the
+// requirement |F_fd - F| <= 1e-6 * max|F| (+1e-13): the central-difference
+// truncation error is O(h^2) ~ 1e-10 and the round-off O(eps E / h) ~ 1e-11.
+//
+// The OIF area terms (eqs. 5, 6) allocate their force towards the triangle's
+// centroid (Jancigova & Cimrak 2015), which is not the gradient of any function
+// of the area; their reported energies are the work along a dilation, so for
+// them the check runs along dilation directions only (of each triangle for
+// local area, of the cell for global area).
+#include "test_oif_mesh.hpp"
+
+#include "interactions/bonded/harmonic.hpp"
+#include "interactions/bonded/oif_edge_terms.hpp"
+#include "interactions/nonbonded/membrane_collision.hpp"
+#include "interactions/nonbonded/soft_sphere.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <string>
+
+using namespace pyoif;
+
+namespace {
+
+using Config = std::vector<Vec3>;
+
+/** One interaction as seen by the test: energy and forces of a configuration,
+ *  random configurations, and the directions to differentiate along (empty:
+ *  every coordinate). */
+struct Case {
+  std::string name;
+  std::function<Config(std::mt19937&)> random_config;
+  std::function<double(const Config&)> energy;
+  std::function<Config(const Config&)> forces;
+  std::function<std::vector<Config>(const Config&)> directions = nullptr;
+  double length_scale = 1.0;
+};
+
+std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+
+Vec3 random_vec(std::mt19937& rng) {
+  return Vec3(uniform(rng), uniform(rng), uniform(rng));
+}
+
+/** A bonded interaction with K particles, through its forces(). */
+template <class IA, int K>
+Case bonded_case(const std::string& name, IA ia, std::vector<double> reference,
+                 std::function<Config(std::mt19937&)> config) {
+  auto input = [ia, reference](const Config& x) {
+    BondInput<K> in;
+    for (int k = 0; k < K; ++k) {
+      in.x[k] = x[k];
+      in.v[k] = Vec3::Zero();
+    }
+    in.reference = reference.empty() ? nullptr : reference.data();
+    return in;
+  };
+  Case c;
+  c.name = name;
+  c.random_config = config;
+  c.energy = [ia, input](const Config& x) {
+    const auto in = input(x);
+    std::array<Vec3, K> f;
+    double e = 0.0;
+    EXPECT_TRUE(ia.forces(in, f, e));
+    return e;
+  };
+  c.forces = [ia, input](const Config& x) {
+    const auto in = input(x);
+    std::array<Vec3, K> f;
+    double e = 0.0;
+    EXPECT_TRUE(ia.forces(in, f, e));
+    return Config(f.begin(), f.end());
+  };
+  return c;
+}
+
+/** A non-bonded model between two particles with fixed per-particle data. */
+template <class Model>
+Case pair_case(const std::string& name, typename Model::Params params, PairContext base,
+               std::function<Config(std::mt19937&)> config) {
+  auto context = [base](const Config& x) {
+    PairContext c = base;
+    c.d = x[0] - x[1];
+    c.dist = c.d.norm();
+    return c;
+  };
+  Case c;
+  c.name = name;
+  c.random_config = config;
+  c.energy = [params, context](const Config& x) { return Model::energy(params, context(x)); };
+  c.forces = [params, context](const Config& x) {
+    const Vec3 f = Model::force(params, context(x));
+    return Config{f, -f};
+  };
+  return c;
+}
+
+/** Two particles at a distance uniform in [lo, hi], random direction. */
+std::function<Config(std::mt19937&)> pair_at(double lo, double hi) {
+  return [lo, hi](std::mt19937& rng) {
+    const Vec3 x0 = random_vec(rng);
+    const double r = lo + (hi - lo) * 0.5 * (1.0 + uniform(rng));
+    return Config{x0, x0 + r * random_vec(rng).normalized()};
+  };
+}
+
+/** A whole OIF cell in a System: the energy is the total bonded energy. */
+Case cell_case(const std::string& name,
+               std::function<void(pyoif::System&, const oif_test::Mesh&)> add,
+               std::function<std::vector<Config>(const Config&)> directions = nullptr) {
+  auto mesh = std::make_shared<oif_test::Mesh>(oif_test::icosphere(1, 2.0));
+  auto sys = oif_test::make_system(20.0);
+  oif_test::add_cell_particles(*sys, mesh->nodes, 0);
+  add(*sys, *mesh);
+  Case c;
+  c.name = name;
+  c.length_scale = 2.0;
+  c.random_config = [mesh](std::mt19937& rng) {
+    Config x(mesh->nodes);
+    const Vec3 stretch(1.0 + 0.2 * uniform(rng), 1.0 + 0.2 * uniform(rng), 1.0);
+    for (auto& xi : x)
+      xi = stretch.cwiseProduct(xi) + 0.15 * random_vec(rng) + Vec3(10, 10, 19.5); // across z = L
+    return x;
+  };
+  c.energy = [sys](const Config& x) {
+    oif_test::set_positions(*sys, x);
+    return sys->compute_energies().bonded;
+  };
+  c.forces = [sys](const Config& x) {
+    oif_test::set_positions(*sys, x);
+    return oif_test::forces_of(*sys, x.size());
+  };
+  c.directions = directions;
+  return c;
+}
+
+/** Relaxed reference values of the unit cell mesh (radius 2). */
+std::vector<double> cell_references(const oif_test::Mesh& m) {
+  return oif_test::angle_references(m, m.nodes);
+}
+
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  const auto four_points = [](std::mt19937& rng) {
+    // two triangles on a common edge, bent by a random angle, randomly placed
+    Config x = {Vec3(0.1, 0.9, 0.0), Vec3(0, 0, 0), Vec3(1.0, 0.1, 0.0), Vec3(0.6, -0.8, 0.0)};
+    for (auto& xi : x)
+      xi += 0.3 * random_vec(rng);
+    return x;
+  };
+  const auto edge = [](std::mt19937& rng) {
+    const Vec3 x0 = random_vec(rng);
+    return Config{x0, x0 + (0.5 + 0.3 * (1.0 + uniform(rng))) * random_vec(rng).normalized()};
+  };
+  // ---- generic interactions
+  out.push_back(bonded_case<HarmonicBond, 2>("harmonic", HarmonicBond{2.5, 0.8, 0.0}, {}, edge));
+  PairContext plain;
+  plain.d = plain.normal_i = plain.normal_j = Vec3::Zero();
+  plain.dist = 0.0;
+  plain.mol_i = 0;
+  plain.mol_j = 1;
+  out.push_back(
+      pair_case<SoftSphere>("soft_sphere", {0.3, 2.5, 1.2, 0.1}, plain, pair_at(0.3, 1.25)));
+  PairContext facing = plain;
+  facing.normal_i = Vec3(0.3, 0.9, -0.2).normalized();
+  facing.normal_j = Vec3(-0.5, -0.7, 0.4).normalized();
+  // membrane collision with fixed normals, on both sides of the crossing:
+  // x_i - x_j along -u (not crossed) or +u (crossed), u = n_i - n_j
+  const Vec3 u = (facing.normal_i - facing.normal_j).normalized();
+  for (const double side : {-1.0, 1.0})
+    out.push_back(pair_case<MembraneCollision>(
+        side < 0 ? "membrane_collision" : "membrane_collision_crossed", {0.05, 8.0, 0.6, 0.05},
+        facing, [u, side](std::mt19937& rng) {
+          const Vec3 x0 = random_vec(rng);
+          const Vec3 dir = (side * u + 0.5 * random_vec(rng)).normalized();
+          return Config{x0 + (0.1 + 0.25 * (1.0 + uniform(rng))) * dir, x0};
+        }));
+  // ---- OIF terms, each on its own
+  const std::vector<double> ref4 = {1.1, 2.9, 0.45, 0.5}; // r0, phi0, A01, A02
+  out.push_back(bonded_case<OifLocalForces, 4>("oif_stretching", OifLocalForces{0.7, 0, 0, 0, 0},
+                                               ref4, four_points));
+  out.push_back(bonded_case<OifLocalForces, 4>("oif_stretching_linear",
+                                               OifLocalForces{0, 0.7, 0, 0, 0}, ref4, four_points));
+  out.push_back(bonded_case<OifLocalForces, 4>("oif_bending", OifLocalForces{0, 0, 0.7, 0, 0}, ref4,
+                                               four_points));
+  // neo-Hookean edge over a wide strain range (lambda 0.3 .. 3)
+  out.push_back(bonded_case<OifLocalForces, 4>(
+      "oif_stretching_large_strain", OifLocalForces{0.7, 0, 0, 0, 0}, ref4, [](std::mt19937& rng) {
+        Config x = {Vec3(0.1, 0.9, 0.0), Vec3(0, 0, 0), Vec3(1.0, 0.1, 0.0), Vec3(0.6, -0.8, 0.0)};
+        x[2] = x[0] + (0.3 + 1.35 * (1.0 + uniform(rng))) * 1.1 * random_vec(rng).normalized();
+        return x;
+      }));
+  // local area, eq. 5, on one triangle (the evaluator OifLocalForces applies
+  // with weight 1/3 in each of the triangle's three bonds; that composition is
+  // checked against eq. 5 in test_oif_membrane.cpp), along its dilation
+  {
+    Case c;
+    c.name = "oif_local_area_triangle";
+    const double kal = 0.9, area0 = 0.3;
+    c.random_config = [](std::mt19937& rng) {
+      return Config{random_vec(rng), Vec3(1, 0, 0) + 0.3 * random_vec(rng),
+                    Vec3(0, 1, 0) + 0.3 * random_vec(rng)};
+    };
+    c.energy = [=](const Config& x) {
+      return oif::local_area_energy(oif::triangle_area(x[0], x[1], x[2]), area0, kal);
+    };
+    c.forces = [=](const Config& x) {
+      Config f(3, Vec3::Zero());
+      const double coefficient =
+          oif::local_area_coefficient(oif::triangle_area(x[0], x[1], x[2]), area0, kal);
+      oif::add_centroid_allocated(x[0], x[1], x[2], coefficient, f[0], f[1], f[2]);
+      return f;
+    };
+    c.directions = [](const Config& x) {
+      const Vec3 t = (x[0] + x[1] + x[2]) / 3.0;
+      return std::vector<Config>{{x[0] - t, x[1] - t, x[2] - t}};
+    };
+    out.push_back(c);
+  }
+  out.push_back(cell_case("oif_volume", [](pyoif::System& s, const oif_test::Mesh& m) {
+    OifGlobalForces g;
+    g.kv = 0.8;
+    g.V0 = 30.0;
+    g.A0_g = 1.0;
+    const int id = s.add_bonded_interaction(g);
+    s.add_bonds(id, oif_test::triangle_bond_ids(m), {});
+  }));
+  out.push_back(cell_case("oif_bending_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
+    const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0.6, 0, 0});
+    s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
+  }));
+  out.push_back(cell_case("oif_stretching_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
+    const int id = s.add_bonded_interaction(OifLocalForces{0.5, 0.2, 0, 0, 0});
+    s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
+  }));
+  // global area along the cell's dilation about its centroid
+  auto cell_dilation = [](const Config& x) {
+    Vec3 c = Vec3::Zero();
+    for (const auto& xi : x)
+      c += xi;
+    c /= static_cast<double>(x.size());
+    Config d(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      d[i] = x[i] - c;
+    return std::vector<Config>{d};
+  };
+  out.push_back(cell_case(
+      "oif_global_area",
+      [](pyoif::System& s, const oif_test::Mesh& m) {
+        OifGlobalForces g;
+        g.ka_g = 0.9;
+        g.A0_g = 40.0;
+        g.V0 = 1.0;
+        const int id = s.add_bonded_interaction(g);
+        s.add_bonds(id, oif_test::triangle_bond_ids(m), {});
+      },
+      cell_dilation));
+  return out;
+}
+
+class ForceEnergy : public ::testing::TestWithParam<int> {};
+
+} // namespace
+
+TEST_P(ForceEnergy, ForceIsMinusGradient) {
+  static const std::vector<Case> all = cases();
+  const Case& c = all[GetParam()];
+  std::mt19937 rng(1234 + GetParam());
+  double worst = 0.0;
+  for (int trial = 0; trial < 5; ++trial) {
+    const Config x = c.random_config(rng);
+    const Config f = c.forces(x);
+    double fmax = 0.0;
+    for (const auto& fi : f)
+      fmax = std::max(fmax, fi.norm());
+    ASSERT_GT(fmax, 1e-8) << c.name << ": the configuration must load the interaction";
+    std::vector<Config> dirs;
+    if (c.directions) {
+      dirs = c.directions(x);
+    } else {
+      for (std::size_t i = 0; i < x.size(); ++i)
+        for (int d = 0; d < 3; ++d) {
+          Config e(x.size(), Vec3::Zero());
+          e[i][d] = 1.0;
+          dirs.push_back(e);
+        }
+    }
+    const double h = 1e-5 * c.length_scale;
+    for (const Config& dir : dirs) {
+      double norm2 = 0.0, f_along = 0.0;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        norm2 += dir[i].squaredNorm();
+        f_along += f[i].dot(dir[i]);
+      }
+      const double scale = 1.0 / std::sqrt(norm2);
+      Config xp(x), xm(x);
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        xp[i] += h * scale * dir[i];
+        xm[i] -= h * scale * dir[i];
+      }
+      const double fd = -(c.energy(xp) - c.energy(xm)) / (2.0 * h);
+      const double err = std::abs(fd - f_along * scale);
+      worst = std::max(worst, err / fmax);
+      EXPECT_LE(err, 1e-6 * fmax + 1e-13) << c.name << " trial " << trial;
+    }
+  }
+  std::cout << "[ figure ] " << c.name << ": max |F_fd - F| / max|F| = " << worst << "\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(AllInteractions, ForceEnergy,
+                         ::testing::Range(0, static_cast<int>(cases().size())),
+                         [](const ::testing::TestParamInfo<int>& param_info) {
+                           static const std::vector<Case> all = cases();
+                           return all[param_info.param].name;
+                         });

@@ -1,0 +1,419 @@
+// OIF membrane moduli on closed meshes (issue 4 tests): on a randomly deformed
+// and randomly rotated icosphere each modulus gives zero total force and
+// torque (to round-off); the relaxed mesh, rotated and moved across the
+// periodic boundary, feels no force; the per-cell surface and volume of the
+// icosahedron match its analytic values and converge to the sphere's; node
+// normals point out of the cell for either triangle orientation; membrane
+// collision pushes two cells apart and reverses when the membranes have crossed.
+#include "test_oif_mesh.hpp"
+
+#include "interactions/bonded/oif_cell_sums.hpp"
+#include "interactions/nonbonded/membrane_collision.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <iostream>
+#include <string>
+
+using namespace pyoif;
+using oif_test::Mesh;
+
+namespace {
+
+constexpr double R = 3.0; // sphere radius (PyOIF-like lattice units)
+
+/** One modulus switched on; everything else zero. */
+struct Modulus {
+  std::string name;
+  std::function<void(System&, const Mesh&, const std::vector<Vec3>& relaxed)> add;
+};
+
+void add_local(System& s, const Mesh& m, const std::vector<Vec3>& relaxed, OifLocalForces ia) {
+  const int id = s.add_bonded_interaction(ia);
+  s.add_bonds(id, oif_test::local_bond_ids(m), oif_test::angle_references(m, relaxed));
+}
+void add_global(System& s, const Mesh& m, const std::vector<Vec3>& relaxed, double kag, double kv,
+                bool flip = false) {
+  OifGlobalForces g;
+  g.ka_g = kag;
+  g.kv = kv;
+  // relaxed surface and volume from the same sums the interaction uses
+  auto tmp = oif_test::make_system(s.box.length()[0]);
+  oif_test::add_cell_particles(*tmp, relaxed, 0);
+  BondGroup group;
+  group.n_particles = 3;
+  group.ids = oif_test::triangle_bond_ids(m);
+  oif::CellSums sums;
+  sums.compute(group, tmp->particles, tmp->box, tmp->comm);
+  g.A0_g = sums.area[0];
+  g.V0 = std::abs(sums.volume[0]);
+  const int id = s.add_bonded_interaction(g);
+  s.add_bonds(id, oif_test::triangle_bond_ids(m, 0, flip), {});
+}
+
+std::vector<Modulus> moduli() {
+  auto local = [](double ks, double kslin, double kb, double kal, double kvisc) {
+    return [=](System& s, const Mesh& m, const std::vector<Vec3>& x0) {
+      add_local(s, m, x0, OifLocalForces{ks, kslin, kb, kal, kvisc});
+    };
+  };
+  return {{"stretching", local(1.0, 0, 0, 0, 0)},
+          {"stretching_linear", local(0, 1.0, 0, 0, 0)},
+          {"bending", local(0, 0, 1.0, 0, 0)},
+          {"local_area", local(0, 0, 0, 1.0, 0)},
+          {"visc", local(0, 0, 0, 0, 1.0)},
+          {"global_area", [](System& s, const Mesh& m,
+                             const std::vector<Vec3>& x0) { add_global(s, m, x0, 1.0, 0.0); }},
+          {"volume", [](System& s, const Mesh& m, const std::vector<Vec3>& x0) {
+             add_global(s, m, x0, 0.0, 1.0);
+           }}};
+}
+
+/** The relaxed icosphere (level 2: 162 nodes, 320 triangles, 480 angles). */
+const Mesh& mesh() {
+  static const Mesh m = oif_test::icosphere(2, R);
+  return m;
+}
+
+} // namespace
+
+TEST(OifMembrane, IcosphereIsClosedAndOutward) {
+  const Mesh& m = mesh();
+  EXPECT_EQ(m.nodes.size(), 162u);
+  EXPECT_EQ(m.triangles.size(), 320u);
+  EXPECT_EQ(m.angles.size(), 480u); // = edges: every edge in exactly one pair
+  auto s = oif_test::make_system();
+  oif_test::add_cell_particles(*s, m.nodes, 0);
+  BondGroup g;
+  g.n_particles = 3;
+  g.ids = oif_test::triangle_bond_ids(m);
+  oif::CellSums sums;
+  sums.compute(g, s->particles, s->box, s->comm);
+  EXPECT_GT(sums.volume[0], 0.0);
+}
+
+// Every modulus on a randomly deformed, randomly rotated mesh: the cell's total
+// force and torque vanish. Tolerance 1e-12 relative to sum |F_i| (and R sum |F_i|
+// for the torque): round-off of ~1e3 additions of O(1) terms is ~1e-13.
+TEST(OifMembrane, ForceAndTorqueFree) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Mesh& m = mesh();
+  for (const auto& mod : moduli())
+    for (int trial = 0; trial < 3; ++trial) {
+      const Eigen::Matrix3d rot = oif_test::random_rotation(rng);
+      const Vec3 stretch(1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng));
+      const Vec3 shift(25.0 + 5 * u(rng), 25.0 + 5 * u(rng), 25.0 + 5 * u(rng));
+      std::vector<Vec3> x(m.nodes.size()), v(m.nodes.size());
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const Vec3 noise(u(rng), u(rng), u(rng));
+        x[i] = rot * (stretch.cwiseProduct(m.nodes[i]) + 0.1 * noise) + shift;
+        v[i] = Vec3(u(rng), u(rng), u(rng));
+      }
+      auto s = oif_test::make_system();
+      oif_test::add_cell_particles(*s, x, 0, 0, &v);
+      mod.add(*s, m, m.nodes);
+      const auto f = oif_test::forces_of(*s, x.size());
+      Vec3 total = Vec3::Zero(), torque = Vec3::Zero();
+      double scale = 0.0;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        total += f[i];
+        torque += (x[i] - shift).cross(f[i]);
+        scale += f[i].norm();
+      }
+      ASSERT_GT(scale, 1e-3) << mod.name << ": the deformation must load the modulus";
+      std::cout << "[ figure ] " << mod.name << " trial " << trial
+                << ": |sum F| / sum|F| = " << total.norm() / scale
+                << ", |torque| / (R sum|F|) = " << torque.norm() / (scale * R) << "\n";
+      EXPECT_LT(total.norm(), 1e-12 * scale) << mod.name << " trial " << trial;
+      EXPECT_LT(torque.norm(), 1e-12 * scale * R) << mod.name << " trial " << trial;
+    }
+}
+
+// Each modulus as composed by the bonds equals the model's equation evaluated
+// directly, per node: eq. 3 on every edge once (stretching lives on the one
+// triangle pair that owns the edge), eq. 5 on every triangle once (a third in
+// each of its three pairs), eqs. 6 and 7 with the cell's surface and volume.
+// Tolerance 1e-12 relative to max |F|.
+TEST(OifMembrane, ModuliMatchModelEquations) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i)
+    x[i] = Vec3(1.2, 0.9, 1.0).cwiseProduct(m.nodes[i]) + 0.1 * Vec3(u(rng), u(rng), u(rng));
+  const double k = 0.7;
+  // relaxed and current cell surface and volume, directly
+  auto surface_volume = [&](const std::vector<Vec3>& y) {
+    double s = 0.0, v = 0.0;
+    for (const auto& t : m.triangles) {
+      s += 0.5 * (y[t[1]] - y[t[0]]).cross(y[t[2]] - y[t[0]]).norm();
+      v += y[t[0]].dot(y[t[1]].cross(y[t[2]])) / 6.0;
+    }
+    return std::make_pair(s, v);
+  };
+  const auto [S0, V0] = surface_volume(m.nodes);
+  const auto [S, V] = surface_volume(x);
+  auto centroid_term = [&](std::vector<Vec3>& f, const std::array<int, 3>& t, double c) {
+    const Vec3 T = (x[t[0]] + x[t[1]] + x[t[2]]) / 3.0;
+    double sum = 0.0;
+    for (int i : t)
+      sum += (T - x[i]).squaredNorm();
+    for (int i : t)
+      f[i] += c / sum * (T - x[i]);
+  };
+  auto area = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return 0.5 * (b - a).cross(c - a).norm();
+  };
+  struct Expect {
+    std::string name;
+    std::function<void(System&)> add;
+    std::vector<Vec3> f;
+  };
+  std::vector<Expect> expected;
+  { // eq. 3, neo-Hookean
+    std::vector<Vec3> f(n, Vec3::Zero());
+    for (const auto& e : m.edges) {
+      const double l0 = (m.nodes[e[1]] - m.nodes[e[0]]).norm();
+      const Vec3 ab = x[e[1]] - x[e[0]];
+      const double l = ab.norm(), lam = l / l0;
+      const double kappa = (std::sqrt(lam) + std::pow(lam, -2.5)) / (lam + std::pow(lam, -3.0));
+      f[e[0]] += k * kappa * (l - l0) * ab / l;
+      f[e[1]] -= k * kappa * (l - l0) * ab / l;
+    }
+    expected.push_back({"stretching",
+                        [&](System& s) {
+                          add_local(s, m, m.nodes, OifLocalForces{k, 0, 0, 0, 0});
+                        },
+                        f});
+  }
+  { // eq. 5
+    std::vector<Vec3> f(n, Vec3::Zero());
+    for (const auto& t : m.triangles)
+      centroid_term(f, t,
+                    k * (area(x[t[0]], x[t[1]], x[t[2]]) -
+                         area(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]])));
+    expected.push_back({"local_area",
+                        [&](System& s) {
+                          add_local(s, m, m.nodes, OifLocalForces{0, 0, 0, k, 0});
+                        },
+                        f});
+  }
+  { // eq. 6
+    std::vector<Vec3> f(n, Vec3::Zero());
+    for (const auto& t : m.triangles)
+      centroid_term(f, t, k * (S - S0) * area(x[t[0]], x[t[1]], x[t[2]]) / S0);
+    expected.push_back({"global_area", [&](System& s) { add_global(s, m, m.nodes, k, 0.0); }, f});
+  }
+  for (const bool flip : {false, true}) { // eq. 7, outward (and inward) triangle order
+    std::vector<Vec3> f(n, Vec3::Zero());
+    for (const auto& t : m.triangles) {
+      const Vec3 n2 = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]); // 2 S n_out
+      for (int i : t)
+        f[i] += -k * (V - V0) / V0 * n2 / 6.0;
+    }
+    expected.push_back({flip ? "volume_inward" : "volume",
+                        [&, flip](System& s) { add_global(s, m, m.nodes, 0.0, k, flip); }, f});
+  }
+  for (const auto& e : expected) {
+    auto s = oif_test::make_system();
+    oif_test::add_cell_particles(*s, x, 0);
+    e.add(*s);
+    const auto f = oif_test::forces_of(*s, n);
+    double fmax = 0.0, err = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      fmax = std::max(fmax, e.f[i].norm());
+      err = std::max(err, (f[i] - e.f[i]).norm());
+    }
+    ASSERT_GT(fmax, 1e-3) << e.name;
+    EXPECT_LT(err, 1e-12 * fmax) << e.name;
+    std::cout << "[ figure ] " << e.name
+              << " vs model equation: max error / max|F| = " << err / fmax << "\n";
+  }
+}
+
+// The relaxed mesh, rotated and moved so that it straddles the periodic box
+// corner, feels no force from any modulus (reference values from the unmoved
+// mesh). Tolerance 1e-10 (unit moduli, forces O(1) at 10% strain).
+TEST(OifMembrane, RelaxedMeshIsForceFree) {
+  std::mt19937 rng(7);
+  const Mesh& m = mesh();
+  const double box = 20.0;
+  for (const auto& mod : moduli()) {
+    if (mod.name == "visc")
+      continue; // dissipative: zero at rest trivially
+    const Eigen::Matrix3d rot = oif_test::random_rotation(rng);
+    std::vector<Vec3> x(m.nodes.size());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] = rot * m.nodes[i] + Vec3(0.3, box - 0.2, 0.1); // across three periodic faces
+    auto s = oif_test::make_system(box);
+    oif_test::add_cell_particles(*s, x, 0);
+    mod.add(*s, m, m.nodes);
+    const auto f = oif_test::forces_of(*s, x.size());
+    double fmax = 0.0;
+    for (const auto& fi : f)
+      fmax = std::max(fmax, fi.norm());
+    EXPECT_LT(fmax, 1e-10) << mod.name;
+    std::cout << "[ figure ] relaxed " << mod.name << ": max |F| = " << fmax << "\n";
+  }
+}
+
+// Surface and volume of the icosahedron (level 0) against the analytic values
+// of that polyhedron (circumradius R: edge a = R / sin(2 pi / 5)), in a
+// periodic box with the cell across the boundary and with both triangle
+// orientations; finer icospheres approach 4 pi R^2 and 4/3 pi R^3.
+TEST(OifMembrane, CellSumsAnalytic) {
+  const double a = R / std::sin(2.0 * M_PI / 5.0);
+  const double area_ico = 5.0 * std::sqrt(3.0) * a * a;
+  const double vol_ico = 5.0 / 12.0 * (3.0 + std::sqrt(5.0)) * a * a * a;
+  double previous_area_error = 1.0, previous_volume_error = 1.0;
+  for (int level = 0; level <= 4; ++level) {
+    const Mesh m = oif_test::icosphere(level, R);
+    for (const bool flip : {false, true}) {
+      auto s = oif_test::make_system(10.0);
+      std::vector<Vec3> x(m.nodes);
+      for (auto& xi : x)
+        xi += Vec3(9.5, 0.5, 5.0); // straddles the x and y faces of a 10^3 box
+      oif_test::add_cell_particles(*s, x, 3);
+      s->compute_forces(); // folds the positions into the box
+      BondGroup g;
+      g.n_particles = 3;
+      g.ids = oif_test::triangle_bond_ids(m, 0, flip);
+      oif::CellSums sums;
+      sums.compute(g, s->particles, s->box, s->comm);
+      ASSERT_EQ(sums.mol_ids.size(), 1u);
+      EXPECT_EQ(sums.mol_ids[0], 3);
+      EXPECT_EQ(sums.volume[0] > 0.0, !flip);
+      const double area = sums.area[0], volume = std::abs(sums.volume[0]);
+      if (level == 0) {
+        EXPECT_NEAR(area, area_ico, 1e-13 * area_ico);
+        EXPECT_NEAR(volume, vol_ico, 1e-13 * vol_ico);
+      }
+      const double area_error = std::abs(area / (4.0 * M_PI * R * R) - 1.0);
+      const double volume_error = std::abs(volume / (4.0 / 3.0 * M_PI * R * R * R) - 1.0);
+      if (!flip) {
+        // inscribed polyhedra: error falls about 4x per level (h^2), 3.1x from level 0 to 1
+        EXPECT_LT(area_error, 0.4 * previous_area_error) << "level " << level;
+        EXPECT_LT(volume_error, 0.4 * previous_volume_error) << "level " << level;
+        previous_area_error = area_error;
+        previous_volume_error = volume_error;
+      }
+      if (!flip)
+        std::cout << "[ figure ] icosphere level " << level << " (" << m.nodes.size()
+                  << " nodes): area/(4 pi R^2) - 1 = " << area / (4.0 * M_PI * R * R) - 1.0
+                  << ", volume/(4/3 pi R^3) - 1 = " << volume / (4.0 / 3.0 * M_PI * R * R * R) - 1.0
+                  << "\n";
+      if (level == 4) {
+        EXPECT_LT(area_error, 2e-3);
+        EXPECT_LT(volume_error, 3e-3);
+      }
+    }
+  }
+}
+
+// OifOutDirection: on a sphere every node normal is within a few degrees of
+// the radial direction, for either triangle orientation and across the
+// periodic boundary.
+TEST(OifMembrane, OutwardNormals) {
+  const Mesh& m = mesh();
+  for (const bool flip : {false, true}) {
+    auto s = oif_test::make_system(10.0);
+    const Vec3 centre(9.0, 1.0, 5.0);
+    std::vector<Vec3> x(m.nodes);
+    for (auto& xi : x)
+      xi += centre;
+    oif_test::add_cell_particles(*s, x, 0);
+    const int id = s->add_bonded_interaction(OifOutDirection{});
+    s->add_bonds(id, oif_test::triangle_bond_ids(m, 0, flip), {});
+    s->compute_forces();
+    double worst = 1.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const Vec3 n = s->particles.normal[s->particles.index(static_cast<int>(i))];
+      EXPECT_NEAR(n.norm(), 1.0, 1e-14);
+      worst = std::min(worst, n.dot(m.nodes[i].normalized()));
+    }
+    EXPECT_GT(worst, std::cos(2.0 * M_PI / 180.0)) << "flip " << flip;
+  }
+}
+
+// Membrane collision, pure evaluator: facing membranes repel along the
+// separation; once node i has passed through j's membrane the force reverses
+// and pulls it back. In both cases the force on i points into i's own cell
+// (F_i . n_i < 0). Same cell, walls and parallel normals: no force.
+TEST(OifMembrane, CollisionDirectionFlipsWhenCrossed) {
+  MembraneCollision::Params p{0.01, 10.0, 0.5, 0.0};
+  PairContext c;
+  c.mol_i = 0;
+  c.mol_j = 1;
+  c.normal_i = Vec3(1, 0, 0);  // cell 0 to the left, its surface facing +x
+  c.normal_j = Vec3(-1, 0, 0); // cell 1 to the right, facing -x
+  // not crossed: i left of j
+  c.d = Vec3(-0.2, 0.05, 0.0);
+  c.dist = c.d.norm();
+  const Vec3 f_apart = MembraneCollision::force(p, c);
+  EXPECT_GT(f_apart.dot(c.d), 0.0);
+  EXPECT_LT(f_apart.dot(c.normal_i), 0.0);
+  // crossed: i has moved past j
+  c.d = Vec3(0.2, 0.05, 0.0);
+  c.dist = c.d.norm();
+  const Vec3 f_crossed = MembraneCollision::force(p, c);
+  EXPECT_LT(f_crossed.dot(c.d), 0.0);
+  EXPECT_LT(f_crossed.dot(c.normal_i), 0.0);
+  EXPECT_NEAR(f_crossed.norm(), f_apart.norm(), 1e-15);
+  // eq. 9 magnitude: -V'(d) = a n e^(n d) / (1 + e^(n d))^2
+  const double d = c.dist, e = std::exp(p.n * d);
+  EXPECT_NEAR(f_apart.norm(), p.a * p.n * e / ((1 + e) * (1 + e)), 1e-15);
+  // no force within one cell, against walls, or with parallel normals
+  PairContext same = c;
+  same.mol_j = 0;
+  EXPECT_EQ(MembraneCollision::force(p, same).norm(), 0.0);
+  PairContext wall = c;
+  wall.wall = true;
+  EXPECT_EQ(MembraneCollision::force(p, wall).norm(), 0.0);
+  PairContext parallel = c;
+  parallel.normal_j = parallel.normal_i;
+  EXPECT_EQ(MembraneCollision::force(p, parallel).norm(), 0.0);
+  // a membrane node without a normal is a set-up error
+  PairContext unset = c;
+  unset.normal_j = Vec3::Zero();
+  EXPECT_THROW(MembraneCollision::force(p, unset), InputError);
+}
+
+// Two spheres of one particle type (cells told apart by mol_id), overlapping by
+// 0.2: with OifOutDirection normals the membrane collision pushes the cells
+// apart along the line of centres, and after one is pushed through the other
+// far enough that nodes have crossed, the crossed pairs pull back (the net
+// force still separates the cells).
+TEST(OifMembrane, CollisionPushesCellsApart) {
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  for (const double gap : {-0.2, 0.1}) {
+    auto s = oif_test::make_system(30.0);
+    const Vec3 c1(10, 15, 15), c2(10 + 2 * R + gap, 15, 15);
+    std::vector<Vec3> x1(m.nodes), x2(m.nodes);
+    for (auto& xi : x1)
+      xi += c1;
+    for (auto& xi : x2)
+      xi += c2;
+    oif_test::add_cell_particles(*s, x1, 0, 0);
+    oif_test::add_cell_particles(*s, x2, 1, static_cast<int>(n));
+    const int id = s->add_bonded_interaction(OifOutDirection{});
+    s->add_bonds(id, oif_test::triangle_bond_ids(m, 0), {});
+    s->add_bonds(id, oif_test::triangle_bond_ids(m, static_cast<int>(n)), {});
+    s->nonbonded.at(0, 0).get<MembraneCollision>() = {0.01, 10.0, 0.5, 0.0};
+    s->nonbonded.commit(0, 0);
+    s->on_interactions_changed();
+    const auto f1 = oif_test::forces_of(*s, n, 0);
+    const auto f2 = oif_test::forces_of(*s, n, static_cast<int>(n));
+    Vec3 total1 = Vec3::Zero(), total2 = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      total1 += f1[i];
+      total2 += f2[i];
+    }
+    EXPECT_LT(total1[0], 0.0) << "gap " << gap;        // cell 1 pushed to -x
+    EXPECT_NEAR((total1 + total2).norm(), 0.0, 1e-14); // action = reaction
+    EXPECT_LT(std::abs(total1[1]) + std::abs(total1[2]), 1e-3 * std::abs(total1[0]));
+  }
+}
