@@ -25,6 +25,11 @@
 #include <cmath>
 #include <sstream>
 
+#if defined(__AVX512F__) && !defined(__clang__)
+// 8-wide vectors halve the instruction count of the collision (32 registers)
+#pragma GCC target("prefer-vector-width=512")
+#endif
+
 namespace pyoif::lb {
 
 using namespace d3q19;
@@ -125,23 +130,52 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
   const std::size_t begin = r.start, end = r.start + r.length;
   int bad = 0;
   if constexpr (!thermal) {
+    // Chunked so that each of the 38 population streams is read or written
+    // sequentially on its own (prefetch-friendly, few line-fill buffers
+    // busy), while the collision runs vectorised on L1-resident buffers.
+    constexpr int chunk = 64;
+    alignas(64) double fin[Q][chunk];
+    alignas(64) double fout[Q][chunk];
+    alignas(64) double force[3][chunk];
+    for (std::size_t c0 = begin; c0 < end; c0 += chunk) {
+      const int len = static_cast<int>(std::min<std::size_t>(chunk, end - c0));
+      for (int q = 0; q < Q; ++q) {
+        const double* __restrict in = src + q * S + c0;
 #pragma GCC ivdep
-    for (std::size_t n = begin; n < end; ++n) {
-      double f[Q], out[Q];
-#pragma GCC unroll 19
-      for (int q = 0; q < Q; ++q)
-        f[q] = src[q * S + n];
-      double F[3] = {fx, fy, fz};
-      if constexpr (with_field) {
-        F[0] += gx[n];
-        F[1] += gy[n];
-        F[2] += gz[n];
+        for (int i = 0; i < len; ++i)
+          fin[q][i] = in[i];
       }
-      const NodeResult res = collide(f, F, l, out);
+      for (int i = 0; i < len; ++i) {
+        force[0][i] = fx;
+        force[1][i] = fy;
+        force[2][i] = fz;
+      }
+      if constexpr (with_field) {
+        for (int i = 0; i < len; ++i) {
+          force[0][i] += gx[c0 + i];
+          force[1][i] += gy[c0 + i];
+          force[2][i] += gz[c0 + i];
+        }
+      }
+#pragma GCC ivdep
+      for (int i = 0; i < len; ++i) {
+        double f[Q], out[Q];
 #pragma GCC unroll 19
-      for (int q = 0; q < Q; ++q)
-        dst[off[q] + n] = out[q];
-      bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+        for (int q = 0; q < Q; ++q)
+          f[q] = fin[q][i];
+        const double F[3] = {force[0][i], force[1][i], force[2][i]};
+        const NodeResult res = collide(f, F, l, out);
+#pragma GCC unroll 19
+        for (int q = 0; q < Q; ++q)
+          fout[q][i] = out[q];
+        bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+      }
+      for (int q = 0; q < Q; ++q) {
+        double* __restrict o = dst + off[q] + c0;
+#pragma GCC ivdep
+        for (int i = 0; i < len; ++i)
+          o[i] = fout[q][i];
+      }
     }
   } else {
     const std::uint64_t counter = m_updates;

@@ -3,6 +3,7 @@
 
 #include "lb/lb_coupling.hpp"
 #include "lb/lb_fluid.hpp"
+#include "lb/lb_roofline.hpp"
 #include "system/system.hpp"
 #include "utils/errors.hpp"
 
@@ -166,6 +167,15 @@ void bind_lb(py::module_& m) {
       .def("set_block", &set_block)
       .def("write_vtk_velocity", &LBFluid::write_vtk_velocity)
       .def("write_vtk_boundary", &LBFluid::write_vtk_boundary);
+
+  m.def(
+      "copy_bandwidth",
+      [](std::size_t n_doubles, int repeats, int n_threads) {
+        py::gil_scoped_release release;
+        return lb::copy_bandwidth(n_doubles, repeats, n_threads);
+      },
+      "STREAM-like copy bandwidth (bytes/s, 16 per element) for the LB roofline",
+      py::arg("n_doubles"), py::arg("repeats") = 10, py::arg("n_threads") = 1);
 
   auto sys = py::reinterpret_borrow<py::class_<System, std::shared_ptr<System>>>(m.attr("System"));
   sys.def(

@@ -1,0 +1,109 @@
+#!/usr/bin/env pyoif
+"""Lattice-Boltzmann kernel speed: MLUPS (million fluid-node updates per
+second) for periodic boxes of 32^3, 64^3, 128^3, 192^3 nodes, a walled
+channel and a 40 %-solid channel, with 1 and 2 threads, and the same figure
+as a fraction of a memory-bandwidth roofline measured on the spot.
+
+    pyoif maintainer/benchmarks/lb_mlups.py [--threads 1 2] [--sizes 32 64 128 192]
+        [--seconds 2] [--csv lb_mlups.csv]
+
+Roofline: STREAM-like copy bandwidth B (b[i] = a[i] over 2 x 256 MiB,
+counted as STREAM does, 16 bytes per element) divided by the bytes the
+kernel must move per node and update: 19 populations read + 19 written,
+2 * 19 * 8 = 304 bytes in double precision. The kernel moves exactly these
+(pre-collision populations read once, post-collision written once, fused
+collide-and-push; no density/velocity fields); the halo exchange and the
+bounce-back fix-up add surface terms, and with particle coupling the force
+field adds 24 bytes read + 24 written (not in these scenes). Like STREAM's
+copy, the write-allocate traffic of the stores is not counted on either side.
+"""
+import argparse
+import csv
+import os
+import subprocess
+import time
+
+import numpy as np
+
+import lbmd
+from lbmd import _lbmd, lb, lbboundaries, shapes
+
+BYTES_PER_NODE = 2 * 19 * 8
+
+
+def make_fluid(shape, threads, walls=None):
+    system = lbmd.System(box_l=list(shape))
+    system.time_step = 0.1
+    fluid = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, n_threads=threads,
+                       ext_force_density=[1e-5, 0, 0])
+    system.actors.add(fluid)
+    if walls is not None:
+        lo, hi = walls
+        system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 1, 0], dist=lo)))
+        system.lbboundaries.add(lbboundaries.LBBoundary(
+            shape=shapes.Wall(normal=[0, -1, 0], dist=-(shape[1] - hi))))
+    return system, fluid
+
+
+def mlups(fluid, seconds):
+    core = fluid._core
+    core.step(2)  # warm-up: page faults, caches
+    n_fluid = core.n_fluid_nodes
+    steps = 1
+    while True:
+        t0 = time.perf_counter()
+        core.step(steps)
+        dt = time.perf_counter() - t0
+        if dt > seconds / 3 or steps > 10000:
+            break
+        steps *= 2
+    best = dt / steps
+    for _ in range(2):
+        t0 = time.perf_counter()
+        core.step(steps)
+        best = min(best, (time.perf_counter() - t0) / steps)
+    return n_fluid / best / 1e6, best, n_fluid
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[32, 64, 128, 192])
+    ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--csv", default="lb_mlups.csv")
+    args = ap.parse_args()
+    try:
+        print(subprocess.run(["lscpu"], capture_output=True, text=True).stdout.split("\n")[7])
+    except (OSError, IndexError):
+        pass
+    rows = []
+    for threads in args.threads:
+        bw = _lbmd.copy_bandwidth(1 << 25, 10, threads)
+        roof = bw / BYTES_PER_NODE / 1e6
+        print(f"\n{threads} thread(s): copy bandwidth {bw / 1e9:.2f} GB/s -> roofline "
+              f"{roof:.1f} MLUPS at {BYTES_PER_NODE} bytes/node")
+        print(f"{'scene':<34} {'fluid nodes':>12} {'ms/update':>10} {'MLUPS':>8} {'roofline':>9}")
+        scenes = [(f"periodic {n}^3", (n, n, n), None) for n in args.sizes]
+        scenes.append(("channel 256x64x64, 2 walls", (256, 64, 64), (1.0, 1.0)))
+        scenes.append(("channel 128^3, 40 % solid", (128, 128, 128), (26.0, 25.0)))
+        for name, shape, walls in scenes:
+            system, fluid = make_fluid(shape, threads, walls)
+            m, sec, n_fluid = mlups(fluid, args.seconds)
+            total = int(np.prod(shape))
+            extra = f" ({100 * (1 - n_fluid / total):.0f} % solid, {sec / total * 1e9:.2f} ns per box node)" \
+                if walls else f" ({sec / total * 1e9:.2f} ns per box node)"
+            print(f"{name:<34} {n_fluid:>12d} {sec * 1e3:>10.2f} {m:>8.1f} {m / roof:>8.0%}{extra}")
+            rows.append(dict(threads=threads, scene=name, fluid_nodes=n_fluid, ms_per_update=sec * 1e3,
+                             mlups=m, copy_GBs=bw / 1e9, roofline_mlups=roof, fraction=m / roof))
+            system.actors.clear()
+            del fluid, system
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        print(f"\nwrote {os.path.abspath(args.csv)}")
+
+
+if __name__ == "__main__":
+    main()
