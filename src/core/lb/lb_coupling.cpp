@@ -51,6 +51,19 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                       const CouplingParams& params, std::uint64_t step, double time_step) {
   if (params.gamma <= 0.0)
     return;
+  // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
+  // repeated computation for the same step deposits F dt / 2 after taking
+  // back the in-flight half of the previous computation of this step
+  auto& ledger = fluid.coupling_ledger();
+  const bool same_step = ledger.any && ledger.step == step;
+  const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
+  if (same_step)
+    for (const auto& [node, impulse] : ledger.last)
+      fluid.add_impulse(node, -0.5 * impulse);
+  ledger.any = true;
+  ledger.step = step;
+  ledger.last.clear();
+  ledger.in_flight.setZero();
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
@@ -68,8 +81,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     }
     p.force[i] += f;
     // the fluid gets -F time_step of momentum per MD step, applied at its next update
-    for (int m = 0; m < 8; ++m)
-      fluid.add_impulse(s.node[m], -s.weight[m] * time_step * f);
+    for (int m = 0; m < 8; ++m) {
+      const Vec3 impulse = -s.weight[m] * time_step * f;
+      fluid.add_impulse(s.node[m], fraction * impulse);
+      ledger.last.emplace_back(s.node[m], impulse);
+      ledger.in_flight += 0.5 * impulse;
+    }
   }
 }
 

@@ -451,7 +451,7 @@ Vec3 LBFluid::total_momentum() const {
         for (int i = 0; i < r.length; ++i)
           j[d] += m_field[d][r.start + i];
   }
-  return j * std::pow(m_p.agrid, 4) / m_p.tau;
+  return j * std::pow(m_p.agrid, 4) / m_p.tau - m_ledger.in_flight;
 }
 
 void LBFluid::write_vtk_velocity(const std::string& path) const {

@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pyoif::lb {
@@ -92,9 +93,11 @@ public:
    *  non-positive or non-finite density or a speed >= the lattice sound speed. */
   void step();
   /** Momentum of the populations plus the impulse accumulated in the force
-   *  field that the next update will apply (particle coupling), MD units. No
-   *  half-force term: a uniform ext_force_density raises it by exactly
-   *  F V tau per update, and particle + fluid momentum is conserved exactly. */
+   *  field that the next update will apply (particle coupling), minus the
+   *  coupling impulse still in flight to the particles (CouplingLedger), MD
+   *  units. No half-force term: a uniform ext_force_density raises it by
+   *  exactly F V tau per update, and particle + fluid momentum is conserved
+   *  to round-off. */
   Vec3 total_momentum() const;
   double total_mass() const;
 
@@ -125,6 +128,22 @@ public:
   Vec3 velocity_at_index(std::size_t n) const;
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
+
+  /** Bookkeeping of the particle coupling under velocity Verlet: an MD step's
+   *  coupling force F_n acts on the particles in two half kicks (dt/2 at the
+   *  end of step n, dt/2 at the start of step n+1) but goes to the fluid at
+   *  once (F_n dt). Half of the last deposit is thus "in flight": not yet
+   *  received by the particles. A force recomputation without a time step
+   *  (same MD step) replaces that half; the first computation deposits only
+   *  that half. total_momentum() excludes the in-flight half, so particle +
+   *  fluid momentum is conserved to round-off at every step. */
+  struct CouplingLedger {
+    bool any = false;
+    std::uint64_t step = 0;
+    std::vector<std::pair<std::size_t, Vec3>> last; ///< node, full impulse of the last call
+    Vec3 in_flight = Vec3::Zero();                  ///< impulse deposited, not yet on particles
+  };
+  CouplingLedger& coupling_ledger() { return m_ledger; }
 
   // --- output -----------------------------------------------------------------
   void write_vtk_velocity(const std::string& path) const;
@@ -172,6 +191,7 @@ private:
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
   std::array<std::array<double, d3q19::Q>, d3q19::Q> m_basis{};
   std::uint64_t m_updates = 0;
+  CouplingLedger m_ledger;
   int m_threads = 1;
 };
 

@@ -1,0 +1,81 @@
+"""Particle-fluid coupling (model eq. 1), through system.thermostat.set_lb.
+
+- Relaxation: a particle of mass m launched with v0 into a heavy fluid at
+  rest slows as v0 exp(-gamma t / m) (the fluid it drags along is ~1000
+  times heavier): the relaxation time fitted over t < 1.5 m / gamma must be
+  within 2 % of m / gamma, and the speed at t = m / gamma within 2 % of v0/e.
+- Momentum: particle + fluid momentum (system.analysis.linear_momentum) is
+  conserved to round-off (1e-12 of m v0) after every MD step, with
+  tau = 5 time steps (the fluid gets the impulse at its next update) and the
+  particle crossing the periodic boundary at a corner; also with kT > 0
+  (fluid and coupling noise both conserve it).
+- The interpolated velocity is trilinear: in a linear velocity field set on
+  the nodes it is exact away from the periodic seam (1e-12).
+"""
+import unittest
+
+import numpy as np
+
+import lbmd
+import lbmd.lb
+
+
+def make(kT=0.0, dens=50.0):
+    system = lbmd.System(box_l=[8.0, 8.0, 8.0])
+    system.time_step = 0.01
+    lbf = lbmd.lb.LBFluid(agrid=1.0, dens=dens, visc=3.0, tau=0.05, kT=kT, seed=3)
+    system.actors.add(lbf)
+    system.thermostat.set_lb(LB_fluid=lbf, gamma=2.0, seed=7)
+    return system, lbf
+
+
+class Coupling(unittest.TestCase):
+
+    def test_relaxation_time(self):
+        system, lbf = make()
+        m, gamma, v0 = 1.0, 2.0, 0.1
+        p = system.part.add(pos=[3.3, 4.1, 2.7], v=[v0, 0, 0], mass=m)
+        times, speeds = [], []
+        for step in range(1, 151):
+            system.integrator.run(1)
+            times.append(step * system.time_step)
+            speeds.append(p.v[0])
+        times, speeds = np.array(times), np.array(speeds)
+        t_relax = -1.0 / np.polyfit(times, np.log(speeds), 1)[0]
+        self.assertAlmostEqual(t_relax / (m / gamma), 1.0, delta=0.02)
+        self.assertAlmostEqual(speeds[49] / (v0 / np.e), 1.0, delta=0.02)  # t = 0.5 = m/gamma
+
+    def check_momentum(self, kT):
+        system, lbf = make(kT=kT, dens=1.0)
+        m, v0 = 1.0, np.array([2.0, 1.5, -1.0])
+        system.part.add(pos=[7.9, 7.95, 0.05], v=v0, mass=m)
+        system.part.add(pos=[1.0, 2.0, 3.0], v=[0.0, 0.3, 0.0], mass=2.0)
+        p0 = system.analysis.linear_momentum()
+        crossed = False
+        for _ in range(60):
+            system.integrator.run(1)
+            np.testing.assert_allclose(system.analysis.linear_momentum(), p0, rtol=0,
+                                       atol=1e-12 * m * np.linalg.norm(v0))
+            crossed |= bool(np.any(system.part.by_id(0).pos > 8.0))
+        self.assertTrue(crossed)
+        # the fluid did take momentum
+        self.assertGreater(np.linalg.norm(lbf.total_momentum()), 0.1 * m * np.linalg.norm(v0))
+
+    def test_momentum_conservation(self):
+        self.check_momentum(0.0)
+
+    def test_momentum_conservation_thermal(self):
+        self.check_momentum(1e-3)
+
+    def test_trilinear_interpolation(self):
+        system, lbf = make()
+        grad = np.array([[0.01, 0.0, 0.02], [0.0, -0.01, 0.0], [0.005, 0.0, 0.0]])
+        nodes = (np.indices((8, 8, 8)).transpose(1, 2, 3, 0) + 0.5)
+        lbf[:, :, :].velocity = nodes @ grad.T
+        for pos in ([1.2, 3.7, 5.1], [4.0, 4.0, 4.0], [0.5, 6.9, 2.25]):
+            np.testing.assert_allclose(lbf.get_interpolated_velocity(pos), grad @ np.array(pos),
+                                       rtol=1e-12, atol=1e-14)
+
+
+if __name__ == "__main__":
+    unittest.main()
