@@ -1,7 +1,9 @@
 """A cell in Poiseuille flow (lattice-Boltzmann fluid between two walls,
 body-force driven): it moves with the flow, migrates away from the nearer
 wall (wall-induced lift on a deformable cell), and keeps its volume within
-1 %."""
+1 %. The cell is a soft spherical capsule (sphere mesh): an RBC tumbles in
+the shear, and its tumbling moves its centre by more than the slow lift in
+a run this short."""
 import unittest
 
 import numpy as np
@@ -24,7 +26,7 @@ class TestCellInPoiseuilleFlow(unittest.TestCase):
         system.cell_system.skin = 0.3
         visc, dens = 1.5, 1.0
         height = H_BOX - 2 * WALL
-        u_max = 0.1
+        u_max = 0.15
         force = 8.0 * dens * visc * u_max / height ** 2  # Poiseuille: u_max = f h^2 / (8 rho nu)
         lbf = lb.LBFluid(agrid=1.0, dens=dens, visc=visc, tau=0.1, ext_force_density=[force, 0.0, 0.0])
         system.actors.add(lbf)
@@ -36,9 +38,9 @@ class TestCellInPoiseuilleFlow(unittest.TestCase):
         u_mid = lbf.get_interpolated_velocity([12.0, 8.0, H_BOX / 2])[0]
         self.assertAlmostEqual(u_mid / u_max, 1.0, delta=0.15)
 
-        rbc = oif.OifCellType(*oif.mesh_files("rbc162"), system=system, resize=(R, R, R),
-                              ks=0.01, kb=0.005, kal=0.01, kag=0.5, kv=0.9, normal=True)
-        z0 = WALL + 4.0  # centre 4 from the bottom wall, 4 below the channel's middle
+        rbc = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(R, R, R),
+                              ks=0.005, kb=0.005, kal=0.01, kag=0.5, kv=5.0, normal=True)
+        z0 = WALL + 4.0  # centre 4 from the bottom wall (1 gap), 4 below the channel's middle
         cell = oif.OifCell(cell_type=rbc, particle_type=0, origin=[6.0, 8.0, z0], rotate=(np.pi / 2, 0, 0))
         for w in walls:
             system.constraints.add(shape=w, particle_type=10, penetrable=False)
@@ -56,13 +58,13 @@ class TestCellInPoiseuilleFlow(unittest.TestCase):
         zs, vx, ufl, vols = map(np.array, (zs, vx, ufl, vols))
         print(f"centre z {z0:.3f} -> {zs[-1]:.3f}, cell v_x {vx[-1]:.4f}, fluid u_x at centre {ufl[-1]:.4f}, "
               f"volume range {vols.min() / rbc.volume0:.4f} .. {vols.max() / rbc.volume0:.4f}")
-        # moves with the flow: after the start-up, cell velocity within 10 % of the fluid's at its centre
-        np.testing.assert_allclose(vx[10:], ufl[10:], rtol=0.10)
-        self.assertGreater(vx[-1], 0.4 * u_max)
-        # migrates away from the wall towards the middle, never back
-        self.assertGreater(zs[-1] - z0, 0.15)
+        # moves with the flow: after the start-up, cell velocity within 5 % of the fluid's at its centre
+        np.testing.assert_allclose(vx[10:], ufl[10:], rtol=0.05)
+        self.assertGreater(vx[-1], 0.5 * u_max)
+        # migrates away from the wall towards the middle, steadily (measured: 0.5 in 6000 steps)
+        self.assertGreater(zs[-1] - z0, 0.3)
         self.assertLess(zs[-1], H_BOX / 2 + 0.5)
-        self.assertTrue(np.all(np.diff(zs[5:]) > -0.02))
+        self.assertTrue(np.all(np.diff(zs) > -1e-3))
         # volume within 1 %
         self.assertLess(np.abs(vols / rbc.volume0 - 1).max(), 0.01)
 

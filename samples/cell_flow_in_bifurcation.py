@@ -1,0 +1,141 @@
+#!/usr/bin/env pyoif
+"""Red blood cells (and optionally one stiff "rare" cell) flowing through a
+channel that bifurcates into two daughter branches and joins again -- the
+scene of the PyOIF paper's study (its Figs 2-5), on a smaller scale by default.
+
+    pyoif samples/cell_flow_in_bifurcation.py [--case A|B|C] [--cells N] [--rare]
+          [--cycles 20] [--steps 500] [--output DIR] [--vtk] [--seed S] [--full]
+
+Geometry (lattice units = um, agrid 1): periodic in x; walls at z = 0..1 and
+z = H-1..H (channel height 20 in the paper, --height); the parent channel
+(width 30) splits at x = 50 into a lower branch and an upper branch of widths
+10/20 (case A), 12/18 (B), 15/15 (C) around an island, and joins again at
+x = 110. Cells: Evans-Fung RBCs of radius 3.91 with 374 nodes and the paper's
+moduli (ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9); the rare cell a sphere
+of radius 7.5 (--full) with 642 nodes, 10x stiffer. Seeded at random in the
+parent channel (oif.seed_cells). Default: 8 RBCs, channel height 14, a short
+run (minutes); --full: the paper's 40 RBCs, height 20 and the rare cell.
+
+Output in DIR: cells.csv (time, cell, type, x, y, z, surface, volume,
+diameter per cycle), branches.csv (which branch each cell entered), and with
+--vtk the membranes and the geometry as VTK for ParaView. At the end the share
+of cells that entered each branch is printed (the paper's Fig 3 quantity).
+"""
+import argparse
+import csv
+import os
+from types import SimpleNamespace
+
+import numpy as np
+
+import lbmd
+import oif
+from lbmd import lb, lbboundaries, shapes
+
+CASES = {"A": (10.0, 20.0), "B": (12.0, 18.0), "C": (15.0, 15.0)}
+
+ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+ap.add_argument("--case", choices=sorted(CASES), default="A")
+ap.add_argument("--cells", type=int, default=None, help="number of RBCs (default 8, --full 40)")
+ap.add_argument("--rare", action="store_true", help="add the stiff rare cell")
+ap.add_argument("--full", action="store_true", help="the paper's sizes (slow: hours)")
+ap.add_argument("--height", type=float, default=None, help="channel height (default 14, --full 20)")
+ap.add_argument("--cycles", type=int, default=20)
+ap.add_argument("--steps", type=int, default=500, help="MD steps per cycle (time step 0.1 us)")
+ap.add_argument("--output", default="output_bifurcation")
+ap.add_argument("--vtk", action="store_true", help="write VTK of the membranes every cycle")
+ap.add_argument("--seed", type=int, default=1)
+args = ap.parse_args()
+n_rbc = args.cells if args.cells is not None else (40 if args.full else 8)
+height = args.height or (20.0 if args.full else 14.0)
+rare = args.rare or args.full
+os.makedirs(args.output, exist_ok=True)
+
+L_X, L_Y = 160.0, 40.0
+PARENT = (5.0, 35.0)                      # parent channel y range (width 30)
+SPLIT, JOIN = 50.0, 110.0                 # x of the bifurcation and of the confluence
+w_low, w_up = CASES[args.case]
+system = lbmd.System(box_l=[L_X, L_Y, height + 2.0])
+system.time_step = 0.1
+system.cell_system.skin = 0.3
+
+# --- geometry: slabs as rhomboids (fluid outside, direction=1) and two walls
+blocks = [
+    ([0.0, 0.0, 0.0], [SPLIT, 0, 0], [0, PARENT[0], 0]),            # parent, below
+    ([0.0, PARENT[1], 0.0], [SPLIT, 0, 0], [0, L_Y - PARENT[1], 0]),  # parent, above
+    ([JOIN, 0.0, 0.0], [L_X - JOIN, 0, 0], [0, PARENT[0], 0]),       # outlet, below
+    ([JOIN, PARENT[1], 0.0], [L_X - JOIN, 0, 0], [0, L_Y - PARENT[1], 0]),
+    ([SPLIT, 0.0, 0.0], [JOIN - SPLIT, 0, 0], [0, 1.0, 0]),          # branch outer walls
+    ([SPLIT, L_Y - 1.0, 0.0], [JOIN - SPLIT, 0, 0], [0, 1.0, 0]),
+    ([SPLIT, 1.0 + w_low, 0.0], [JOIN - SPLIT, 0, 0], [0, L_Y - 2.0 - w_low - w_up, 0]),  # island
+]
+boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(height + 1.0))]
+for corner, a, b in blocks:
+    rh = shapes.Rhomboid(corner=corner, a=a, b=b, c=[0, 0, height + 2.0], direction=1)
+    boundaries.append(rh)
+    if args.vtk:
+        oif.output_vtk_rhomboid(rh, os.path.join(args.output, f"block_{len(boundaries)}.vtk"))
+if args.vtk:
+    for name, z in (("bottom", 0.0), ("top", height + 1.0)):
+        oif.output_vtk_rhomboid(SimpleNamespace(corner=[0, 0, z], a=[L_X, 0, 0], b=[0, L_Y, 0], c=[0, 0, 1.0]),
+                                os.path.join(args.output, f"wall_{name}.vtk"))
+
+# --- cells
+rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(3.91, 3.91, 3.91),
+                      ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9, normal=True)
+types, counts, ptypes = [rbc], [n_rbc], [0]
+if rare:
+    r_rare = 7.5 if args.full else 4.5
+    rare_type = oif.OifCellType(*oif.mesh_files("sphere642"), system=system, resize=(r_rare,) * 3,
+                                ks=0.05, kb=0.2, kal=0.07, kag=0.7, kv=0.9, normal=True)
+    types.append(rare_type)
+    counts.append(1)
+    ptypes.append(1)
+region = ([2.0, PARENT[0], 1.0], [SPLIT - 6.0, PARENT[1], height + 1.0])  # seed in the parent channel
+cells = oif.seed_cells(system, types, counts=counts, boundaries=boundaries, region=region,
+                       particle_types=ptypes, seed=args.seed)
+print(f"case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches {w_low}/{w_up}, "
+      f"height {height}")
+
+# --- fluid, coupling, contacts
+lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[1.5e-4, 0.0, 0.0])
+system.actors.add(lbf)
+for b in boundaries:
+    system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
+    system.constraints.add(shape=b, particle_type=10, penetrable=False)
+system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
+for t in set(ptypes):
+    system.non_bonded_inter[t, 10].soft_sphere.set_params(a=0.0001, n=1.2, cutoff=0.6, offset=0.0)
+    for u in set(ptypes):
+        if u >= t:
+            system.non_bonded_inter[t, u].membrane_collision.set_params(a=0.0001, n=1.2, cutoff=0.6, offset=0.0)
+
+# --- run
+branch = {}  # cell index -> "lower"/"upper", decided when the centre passes the middle of the branches
+mid_x = 0.5 * (SPLIT + JOIN)
+with open(os.path.join(args.output, "cells.csv"), "w", newline="") as f:
+    out = csv.writer(f)
+    out.writerow(["time", "cell", "type", "x", "y", "z", "surface", "volume", "diameter"])
+    for i in range(args.cycles + 1):
+        if i:
+            system.integrator.run(args.steps)
+        for k, c in enumerate(cells):
+            x, y, z = c.get_origin_folded()
+            out.writerow([f"{system.time:.1f}", k, c.particle_type, f"{x:.3f}", f"{y:.3f}", f"{z:.3f}",
+                          f"{c.surface():.3f}", f"{c.volume():.3f}", f"{c.diameter():.3f}"])
+            if SPLIT < x < JOIN and abs(x - mid_x) < 10.0 and k not in branch:
+                branch[k] = "lower" if y < 1.0 + w_low + 0.5 * (L_Y - 2.0 - w_low - w_up) else "upper"
+            if args.vtk:
+                c.output_vtk_pos_folded(os.path.join(args.output, f"cell{k}_{i}.vtk"))
+        f.flush()
+        print(f"cycle {i:3d}  time {system.time:8.1f} us  cells in branches: "
+              f"lower {sum(v == 'lower' for v in branch.values())}, upper {sum(v == 'upper' for v in branch.values())}")
+with open(os.path.join(args.output, "branches.csv"), "w", newline="") as f:
+    w = csv.writer(f)
+    w.writerow(["cell", "type", "branch"])
+    for k, v in sorted(branch.items()):
+        w.writerow([k, cells[k].particle_type, v])
+n = max(len(branch), 1)
+print(f"share of cells entering the lower (width {w_low}) / upper (width {w_up}) branch: "
+      f"{sum(v == 'lower' for v in branch.values()) / n:.2f} / {sum(v == 'upper' for v in branch.values()) / n:.2f}"
+      f" ({len(branch)} cells)")
