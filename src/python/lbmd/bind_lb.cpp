@@ -91,6 +91,12 @@ void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const V
     for (int j = lo[1]; j < hi[1]; ++j)
       for (int k = lo[2]; k < hi[2]; ++k) {
         const Vec3i node(i, j, k);
+        // a block spanning boundary nodes sets the fluid nodes only; a single
+        // boundary node is an error (raised by the setters)
+        if (n.prod() > 1 && fluid.node_boundary(node) >= 0) {
+          v += nc;
+          continue;
+        }
         if (prop == "velocity") {
           fluid.set_node_density_velocity(node, fluid.node_density(node), Vec3(v[0], v[1], v[2]));
         } else if (prop == "density") {

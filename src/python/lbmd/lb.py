@@ -131,7 +131,9 @@ def _path(path):
 class LBFluidRoutines:
     """Nodes ``lbf[i, j, k]`` (integers or slices): velocity, density,
     population (19 values, ESPResSo/DSL order), boundary (0 fluid, b + 1 for
-    the b-th LBBoundary), pressure_tensor (3 x 3, sum_q c c f)."""
+    the b-th LBBoundary), pressure_tensor (3 x 3, sum_q c c f). Setting a
+    slice sets its fluid nodes (boundary nodes are skipped); setting a single
+    boundary node is an error."""
 
     _shapes = {"velocity": (3,), "density": (), "boundary": (), "population": (19,),
                "pressure_tensor": (3, 3)}
