@@ -32,8 +32,15 @@ void CellSums::compute(const BondGroup& group, const ParticleStore& p, const Box
     hi = std::max(hi, mol);
   }
   if (comm.size() > 1) {
-    lo = static_cast<int>(-comm.allreduce_max(n ? -static_cast<double>(lo) : -1e18));
-    hi = static_cast<int>(comm.allreduce_max(n ? static_cast<double>(hi) : -1e18));
+    const double glo = -comm.allreduce_max(n ? -static_cast<double>(lo) : -1e18);
+    const double ghi = comm.allreduce_max(n ? static_cast<double>(hi) : -1e18);
+    if (ghi < glo) { // no triangles on any rank
+      lo = 0;
+      hi = -1;
+    } else {
+      lo = static_cast<int>(glo);
+      hi = static_cast<int>(ghi);
+    }
   }
   mol_ids.clear();
   bond_cell.assign(n, -1);
