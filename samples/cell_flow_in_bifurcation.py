@@ -26,8 +26,6 @@ import csv
 import os
 from types import SimpleNamespace
 
-import numpy as np
-
 import lbmd
 import oif
 from lbmd import lb, lbboundaries, shapes

@@ -10,7 +10,6 @@ from scipy.integrate import quad
 
 import lbmd
 import oif
-from oif import mesh_io
 
 SHARED = os.environ.get("PYOIF_SHARED_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "..",
                                                           "shared", "data"))

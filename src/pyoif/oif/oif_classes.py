@@ -19,13 +19,13 @@ import os
 import numpy as np
 
 import lbmd
-from lbmd.particle_data import ParticleHandle, ParticleSlice
+from lbmd.particle_data import ParticleHandle
 
 from . import geometry as geo
 from . import mesh_io
 from . import vtk as _vtk
-from .oif_utils import (large_number, small_epsilon, custom_str, norm, vec_distance,  # noqa: F401
-                        get_triangle_normal, area_triangle, angle_btw_triangles, angle_btw_vectors)
+from .oif_utils import (small_epsilon, custom_str, vec_distance, get_triangle_normal, area_triangle,
+                        angle_btw_triangles, angle_btw_vectors)
 
 #: PyOIF's exclusion_neighbours=True excluded the first and second mesh neighbours
 DEFAULT_EXCLUSION_RINGS = 2

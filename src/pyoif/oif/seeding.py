@@ -50,6 +50,15 @@ def rotation_to_angles(rot):
     return np.array([a, b, c])
 
 
+def _signed_distance(shape):
+    """Fast signed distance of a point to an lbmd shape (its C++ object
+    directly, without per-call argument checks) or any object with calc_dist."""
+    core = getattr(shape, "_core", None)
+    if core is not None and hasattr(core, "calc_dist"):
+        return lambda p: core.calc_dist(p)[0]
+    return lambda p: shape.calc_dist(p)[0]
+
+
 def _min_image(d, box, periodic):
     d = d.copy()
     d[..., periodic] -= box[periodic] * np.round(d[..., periodic] / box[periodic])
@@ -85,7 +94,8 @@ def fluid_volume(system, boundaries, region=None, spacing=None):
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     fraction = np.ones(len(grid))
     for shape in boundaries:
-        d = np.array([shape.calc_dist(p)[0] for p in grid])
+        dist = _signed_distance(shape)
+        d = np.array([dist(p) for p in grid])
         fraction = np.minimum(fraction, np.clip(0.5 + d / steps.min(), 0.0, 1.0))
     return float(np.prod(steps) * fraction.sum())
 
@@ -202,12 +212,13 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
 
 def _clear_of_boundaries(nodes, centre, radius, boundaries, margin):
     for shape in boundaries:
-        d, _ = shape.calc_dist(centre)
+        dist = _signed_distance(shape)
+        d = dist(centre)
         if d > radius + margin:
             continue  # the whole cell is far from this shape
         if d < -radius:
             return False
-        if min(shape.calc_dist(p)[0] for p in nodes) < margin:
+        if min(dist(p) for p in nodes) < margin:
             return False
     return True
 
