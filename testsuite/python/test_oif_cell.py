@@ -256,6 +256,32 @@ class TestOifCell(unittest.TestCase):
         m.triangles = m.triangles[:20]
         self.assertAlmostEqual(cell.surface(), sum(t.area() for t in m.triangles[:20]), places=10)
 
+    def test_three_neighbors_and_force_output(self):
+        """PyOIF's ThreeNeighbors (normal=True) span a plane whose normal points
+        out of the cell; elastic_forces writes per-node magnitudes to VTK and
+        one force as raw rows."""
+        ct = oif.OifCellType(*oif.mesh_files("sphere642"), system=self.system, resize=(3.0, 3.0, 3.0),
+                             ks=0.05, kb=0.02, kv=0.5, normal=True)
+        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20, 15, 15])
+        centre = cell.get_origin()
+        for nb, p in zip(cell.mesh.neighbors, cell.mesh.points):
+            self.assertGreater(np.dot(nb.outer_normal(), p.get_pos() - centre), 0.0)
+            self.assertEqual(len({nb.A.id, nb.B.id, nb.C.id}), 3)
+            self.assertIn(nb.A.id, p.neighbour_ids)
+        cell.particles.pos = (cell.mesh.positions() - centre) * [1.2, 1.0, 0.9] + centre
+        self.system.integrator.run(0, recalc_forces=True)
+        cell.elastic_forces(el_forces=(1, 1, 0, 0, 1, 1), vtk_file=self.path("el.vtk"))
+        _, _, data = read_vtk(self.path("el.vtk"))
+        self.assertEqual(sorted(data), ["kav_f_metric", "kb_f_metric", "ks_f_metric", "total_f_metric"])
+        np.testing.assert_allclose(data["total_f_metric"], np.linalg.norm(cell.particles.f, axis=1), rtol=1e-9)
+        cell.elastic_forces(el_forces=(0, 0, 0, 0, 0, 1), raw_data_file=self.path("raw.dat"))
+        np.testing.assert_allclose(np.loadtxt(self.path("raw.dat")), cell.particles.f, rtol=1e-9, atol=1e-15)
+        self.assertEqual(cell.elastic_forces(), 0)
+        with self.assertRaisesRegex(ValueError, "exactly one"):
+            cell.elastic_forces(el_forces=(1, 1, 0, 0, 0, 0), raw_data_file=self.path("raw.dat"))
+        with self.assertRaisesRegex(ValueError, "vtk_file needs"):
+            cell.elastic_forces(el_forces=6 * [0], vtk_file=self.path("x.vtk"))
+
     @unittest.skipUnless(hasattr(lbmd.shapes, "Rhomboid") and hasattr(lbmd.shapes, "Cylinder"),
                          "lbmd.shapes.Rhomboid/Cylinder not built yet")
     def test_shape_vtk(self):
