@@ -43,7 +43,7 @@ ap.add_argument("--steps", type=int, default=500, help="MD steps per cycle (time
 ap.add_argument("--output", default="output_bifurcation")
 ap.add_argument("--vtk", action="store_true", help="write VTK of the membranes every cycle")
 ap.add_argument("--seed", type=int, default=1)
-ap.add_argument("--force", type=float, default=3e-3,
+ap.add_argument("--force", type=float, default=1e-2,
                 help="body force density driving the flow (default: centre speed ~0.05 um/us so that cells "
                      "reach the branches within the default run; the paper's 1.3e-3 um/us is ~40x slower)")
 args = ap.parse_args()
