@@ -167,21 +167,16 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
   const bool streaming = 2 * Q * S * sizeof(double) > (std::size_t{32} << 20);
   int bad = 0;
   if constexpr (!thermal) {
-    // Chunked so that each of the 38 population streams is read or written
-    // sequentially on its own (prefetch-friendly, few line-fill buffers
-    // busy), while the collision runs vectorised on L1-resident buffers.
+    // Chunked: the collision runs vectorised over up to 64 nodes reading the
+    // 19 source streams directly (aligned, contiguous) and writing an
+    // L1-resident buffer, which is then pushed out one population row at a
+    // time (the push offsets make the destinations unaligned; row copies can
+    // use streaming stores, see store_row).
     constexpr int chunk = 64;
-    alignas(64) double fin[Q][chunk];
     alignas(64) double fout[Q][chunk];
     alignas(64) double force[3][chunk];
     for (std::size_t c0 = begin; c0 < end; c0 += chunk) {
       const int len = static_cast<int>(std::min<std::size_t>(chunk, end - c0));
-      for (int q = 0; q < Q; ++q) {
-        const double* __restrict in = src + q * S + c0;
-#pragma GCC ivdep
-        for (int i = 0; i < len; ++i)
-          fin[q][i] = in[i];
-      }
       for (int i = 0; i < len; ++i) {
         force[0][i] = fx;
         force[1][i] = fy;
@@ -199,7 +194,7 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
         double f[Q], out[Q];
 #pragma GCC unroll 19
         for (int q = 0; q < Q; ++q)
-          f[q] = fin[q][i];
+          f[q] = src[q * S + c0 + i];
         const double F[3] = {force[0][i], force[1][i], force[2][i]};
         const NodeResult res = collide(f, F, l, out);
 #pragma GCC unroll 19
