@@ -57,7 +57,11 @@ inline bool bending(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, 
   const Dihedral g = dihedral(a, b, c, d);
   if (!g.valid)
     return false;
-  const double dphi = std::remainder(g.phi - phi0, 2.0 * M_PI);
+  double dphi = g.phi - phi0; // wrapped into (-pi, pi]: phi0 may come as [0, 2 pi] or beyond
+  while (dphi > M_PI)
+    dphi -= 2.0 * M_PI;
+  while (dphi <= -M_PI)
+    dphi += 2.0 * M_PI;
   for (int k = 0; k < 4; ++k)
     f[k] = -kb * dphi * g.grad[k];
   energy = 0.5 * kb * dphi * dphi;

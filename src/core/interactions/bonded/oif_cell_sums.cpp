@@ -58,17 +58,18 @@ void CellSums::compute(const BondGroup& group, const ParticleStore& p, const Box
     const int i0 = local_index(p, ids[0]);
     const long k = static_cast<long>(p.mol_id[i0]) - lo;
     bond_cell[b] = static_cast<int>(k);
+    // unfolded coordinates (position + image count): continuous along the
+    // trajectory, so exact for a cell of any size, and no minimum-image
+    // rounding in this per-step pass
     const Vec3 x0 = box.unfolded(p.pos[i0], p.image[i0]);
     if (!has_reference[k]) {
       reference[k] = x0;
       has_reference[k] = 1;
     }
-    // the first vertex relative to the cell's reference point in unfolded
-    // coordinates (continuous along the trajectory, exact for a cell of any
-    // size); the other two by the minimum image across the short edges
+    const int i1 = local_index(p, ids[1]), i2 = local_index(p, ids[2]);
     const Vec3 a = x0 - reference[k];
-    const Vec3 bb = a + box.minimum_image(p.pos[local_index(p, ids[1])], p.pos[i0]);
-    const Vec3 c = a + box.minimum_image(p.pos[local_index(p, ids[2])], p.pos[i0]);
+    const Vec3 bb = box.unfolded(p.pos[i1], p.image[i1]) - reference[k];
+    const Vec3 c = box.unfolded(p.pos[i2], p.image[i2]) - reference[k];
     sums[k] += triangle_area(a, bb, c);
     sums[range + k] += tetra_volume(a, bb, c);
     sums[2 * range + k] += 1.0;

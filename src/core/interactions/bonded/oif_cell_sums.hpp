@@ -23,11 +23,12 @@ struct CellSums {
 
   /** Recompute from the current positions. Volumes are exact for a closed mesh
    *  in a periodic box, also for cells crossing the boundary and cells larger
-   *  than half the box: each triangle's first vertex is taken relative to the
-   *  cell's reference point (the first node of its first triangle) in unfolded
-   *  coordinates (position + image count, continuous along the trajectory),
-   *  its other vertices by the minimum image across its edges. (A pure
-   *  minimum-image chain would need the cell to span less than half the box.)
+   *  than half the box: vertices are taken in unfolded coordinates (position +
+   *  image count, continuous along the trajectory) relative to the cell's
+   *  reference point (the first node of its first triangle). (A minimum-image
+   *  chain would need the cell to span less than half the box, and costs a
+   *  rounding per coordinate.) Requirement: a cell's nodes have continuous
+   *  unfolded positions, as they do when created and moved by the integrator.
    *  Throws SimulationInstability if a bond refers to a missing particle. */
   void compute(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
                const Communicator& comm);

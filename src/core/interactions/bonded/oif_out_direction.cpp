@@ -17,8 +17,10 @@ void OifOutDirection::prepare(const BondGroup& group, ParticleStore& p, const Bo
   for (std::size_t b = 0; b < n; ++b) {
     const int* ids = group.bond(b);
     const int i0 = p.index(ids[0]), i1 = p.index(ids[1]), i2 = p.index(ids[2]);
-    const Vec3 e1 = box.minimum_image(p.pos[i1], p.pos[i0]);
-    const Vec3 e2 = box.minimum_image(p.pos[i2], p.pos[i0]);
+    // unfolded coordinates, as in the cell sums (no minimum-image rounding)
+    const Vec3 x0 = box.unfolded(p.pos[i0], p.image[i0]);
+    const Vec3 e1 = box.unfolded(p.pos[i1], p.image[i1]) - x0;
+    const Vec3 e2 = box.unfolded(p.pos[i2], p.image[i2]) - x0;
     const double s = sums.volume[sums.bond_cell[b]] < 0.0 ? -1.0 : 1.0;
     const Vec3 n2 = s * e1.cross(e2); // twice the area times the outward unit normal
     p.normal[i0] += n2;
