@@ -179,6 +179,24 @@ class Access(unittest.TestCase):
         self.assertEqual(lbf[0, 1, 0].boundary, 1)
         self.assertEqual(lbf[0, 2, 0].boundary, 0)
 
+    def test_boundaries_before_fluid_and_removal(self):
+        s = system(box=(4.0, 6.0, 4.0))
+        wall = lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 1, 0], dist=2.0))
+        s.lbboundaries.add(wall)
+        lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
+        np.testing.assert_array_equal(lbf[0, :, 0].boundary, [1, 1, 0, 0, 0, 0])
+        self.assertEqual(lbf._core.n_fluid_nodes, 4 * 4 * 4)
+        self.assertAlmostEqual(lbf.total_mass(), 64.0, delta=1e-12 * 64)
+        s.lbboundaries.remove(wall)
+        np.testing.assert_array_equal(lbf[0, :, 0].boundary, [0] * 6)
+        # freed nodes restart at rest at dens
+        self.assertAlmostEqual(lbf.total_mass(), 96.0, delta=1e-12 * 96)
+        np.testing.assert_allclose(lbf[0, 0, 0].velocity, 0.0, atol=1e-15)
+        s.lbboundaries.add(wall)
+        s.lbboundaries.clear()
+        self.assertEqual(len(s.lbboundaries), 0)
+        self.assertEqual(lbf._core.n_fluid_nodes, 96)
+
 
 class Instability(unittest.TestCase):
 

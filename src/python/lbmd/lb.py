@@ -60,10 +60,10 @@ class LBFluid(ParameterObject):
                              bulk_visc=self.bulk_visc, ext_force_density=self.ext_force_density,
                              kT=self.kT, seed=self.seed, collision=self.collision,
                              n_threads=self.n_threads, box_l=system.box_l)
+        system.lbboundaries._apply(core)
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)
         object.__setattr__(self, "_system", system)
-        system.lbboundaries._update()
 
     def _deactivate(self, system):
         system._core.set_lb(None)

@@ -42,10 +42,15 @@ class LBBoundaries:
                 return a
         return None
 
+    def _apply(self, core):
+        """Flags the boundary nodes of a fluid's lattice (also called by
+        LBFluid._activate, before the fluid is listed in system.actors)."""
+        core.set_boundaries([(b.shape._core, b.velocity) for b in self._list])
+
     def _update(self):
         fluid = self._fluid()
         if fluid is not None:
-            fluid._core.set_boundaries([(b.shape._core, b.velocity) for b in self._list])
+            self._apply(fluid._core)
 
     def add(self, boundary):
         if not isinstance(boundary, LBBoundary):
