@@ -106,10 +106,11 @@ for b in boundaries:
     system.constraints.add(shape=b, particle_type=10, penetrable=False)
 system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
 for t in set(ptypes):
-    system.non_bonded_inter[t, 10].soft_sphere.set_params(a=0.0001, n=1.2, cutoff=0.6, offset=0.0)
+    # node-wall repulsion strong enough for cells driven onto the island's corners
+    system.non_bonded_inter[t, 10].soft_sphere.set_params(a=0.002, n=1.5, cutoff=1.0, offset=0.0)
     for u in set(ptypes):
         if u >= t:
-            system.non_bonded_inter[t, u].membrane_collision.set_params(a=0.0001, n=1.2, cutoff=0.6, offset=0.0)
+            system.non_bonded_inter[t, u].membrane_collision.set_params(a=0.01, n=4.0, cutoff=0.8, offset=0.0)
 
 # --- run
 branch = {}  # cell index -> "lower"/"upper", decided when the centre passes the middle of the branches
