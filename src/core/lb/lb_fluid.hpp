@@ -166,7 +166,7 @@ private:
   void rebuild_geometry();
   void halo_exchange(double* f) const;
   void apply_bounce_back(double* f) const;
-  template <bool thermal, bool with_field>
+  template <bool thermal, bool with_field, bool ghosts_relaxed>
   bool update_run(const Run& r, const double* src, double* dst) const;
   void report_instability(const Run& r) const;
   void moments(std::size_t n, double& rho, Vec3& j) const;

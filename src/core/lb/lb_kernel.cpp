@@ -53,7 +53,10 @@ struct NodeResult {
   double rho, u2;
 };
 
-/** Collision of one node; f in, out post-collision (same q order). */
+/** Collision of one node; f in, out post-collision (same q order).
+ *  ghosts_relaxed: the ghost modes go to equilibrium in one update (lambda
+ *  even = odd = 0, the MRT default), which drops their terms at compile time. */
+template <bool ghosts_relaxed>
 __attribute__((always_inline)) inline NodeResult collide(const double* f, const double* F,
                                                          const Relaxation& l, double* out) {
   double s[n_pairs], d[n_pairs];
@@ -93,7 +96,9 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   const double n_iso = (n_xx + n_yy + n_zz) * (1.0 / 3.0);
   const double uf_iso = (2.0 / 3.0) * (u[0] * F[0] + u[1] * F[1] + u[2] * F[2]);
   const double shear_src = 0.5 * (1.0 + l.shear), bulk_src = 0.5 * (1.0 + l.bulk);
-  const double ds = l.shear - l.even, db = l.bulk - l.even;
+  const double l_even = ghosts_relaxed ? 0.0 : l.even;
+  const double l_odd = ghosts_relaxed ? 0.0 : l.odd;
+  const double ds = l.shear - l_even, db = l.bulk - l_even;
   const double iso = db * n_iso + bulk_src * uf_iso;
   const double b_xx = ds * (n_xx - n_iso) + shear_src * (2.0 * u[0] * F[0] - uf_iso) + iso;
   const double b_yy = ds * (n_yy - n_iso) + shear_src * (2.0 * u[1] * F[1] - uf_iso) + iso;
@@ -102,11 +107,11 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   const double b_xz = ds * n_xz + shear_src * (u[0] * F[2] + u[2] * F[0]);
   const double b_yz = ds * n_yz + shear_src * (u[1] * F[2] + u[2] * F[1]);
   const double tr_b_third = (b_xx + b_yy + b_zz) * (1.0 / 3.0);
-  const double one_minus_le = 1.0 - l.even;
-  const double jj[3] = {(1.0 - l.odd) * j[0] + F[0], (1.0 - l.odd) * j[1] + F[1],
-                        (1.0 - l.odd) * j[2] + F[2]};
+  const double one_minus_le = 1.0 - l_even;
+  const double jj[3] = {(1.0 - l_odd) * j[0] + F[0], (1.0 - l_odd) * j[1] + F[1],
+                        (1.0 - l_odd) * j[2] + F[2]};
   const double eq_common = 1.0 - 1.5 * u2;
-  out[0] = one_minus_le * w[0] * rho * eq_common + l.even * f[0] - w[0] * 4.5 * tr_b_third;
+  out[0] = one_minus_le * w[0] * rho * eq_common + l_even * f[0] - w[0] * 4.5 * tr_b_third;
 #pragma GCC unroll 9
   for (int k = 0; k < n_pairs; ++k) {
     const auto& ck = c[2 * k + 1];
@@ -115,9 +120,9 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
     const double cbc = ck[0] * ck[0] * b_xx + ck[1] * ck[1] * b_yy + ck[2] * ck[2] * b_zz +
                        2.0 * (ck[0] * ck[1] * b_xy + ck[0] * ck[2] * b_xz + ck[1] * ck[2] * b_yz);
     const double even = one_minus_le * wk * rho * (eq_common + 4.5 * cu * cu) +
-                        0.5 * l.even * s[k] + wk * 4.5 * (cbc - tr_b_third);
+                        0.5 * l_even * s[k] + wk * 4.5 * (cbc - tr_b_third);
     const double odd =
-        0.5 * l.odd * d[k] + 3.0 * wk * (ck[0] * jj[0] + ck[1] * jj[1] + ck[2] * jj[2]);
+        0.5 * l_odd * d[k] + 3.0 * wk * (ck[0] * jj[0] + ck[1] * jj[1] + ck[2] * jj[2]);
     out[2 * k + 1] = even + odd;
     out[2 * k + 2] = even - odd;
   }
@@ -151,7 +156,7 @@ inline void store_row(double* __restrict dst, const double* __restrict src, int 
 
 } // namespace
 
-template <bool thermal, bool with_field>
+template <bool thermal, bool with_field, bool ghosts_relaxed>
 bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __restrict dst) const {
   const std::size_t S = m_stride;
   const Relaxation l = m_relax;
@@ -196,7 +201,7 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
         for (int q = 0; q < Q; ++q)
           f[q] = src[q * S + c0 + i];
         const double F[3] = {force[0][i], force[1][i], force[2][i]};
-        const NodeResult res = collide(f, F, l, out);
+        const NodeResult res = collide<ghosts_relaxed>(f, F, l, out);
 #pragma GCC unroll 19
         for (int q = 0; q < Q; ++q)
           fout[q][i] = out[q];
@@ -217,7 +222,7 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
         F[1] += gy[n];
         F[2] += gz[n];
       }
-      const NodeResult res = collide(f, F, l, out);
+      const NodeResult res = collide<false>(f, F, l, out);
       bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
       // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
@@ -330,6 +335,7 @@ void LBFluid::report_instability(const Run& r) const {
 void LBFluid::step() {
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
+  const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;
   const long n_runs = static_cast<long>(m_runs.size());
   long first_bad = n_runs;
   const double* src = m_f;
@@ -339,12 +345,16 @@ void LBFluid::step() {
 #endif
   for (long i = 0; i < n_runs; ++i) {
     bool bad;
+    const Run& r = m_runs[i];
     if (thermal)
-      bad = field ? update_run<true, true>(m_runs[i], src, dst)
-                  : update_run<true, false>(m_runs[i], src, dst);
+      bad = field ? update_run<true, true, false>(r, src, dst)
+                  : update_run<true, false, false>(r, src, dst);
+    else if (relaxed)
+      bad = field ? update_run<false, true, true>(r, src, dst)
+                  : update_run<false, false, true>(r, src, dst);
     else
-      bad = field ? update_run<false, true>(m_runs[i], src, dst)
-                  : update_run<false, false>(m_runs[i], src, dst);
+      bad = field ? update_run<false, true, false>(r, src, dst)
+                  : update_run<false, false, false>(r, src, dst);
     if (bad && i < first_bad)
       first_bad = i;
   }
