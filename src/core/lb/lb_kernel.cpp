@@ -172,12 +172,12 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
   const bool streaming = 2 * Q * S * sizeof(double) > (std::size_t{32} << 20);
   int bad = 0;
   if constexpr (!thermal) {
-    // Chunked: the collision runs vectorised over up to 64 nodes reading the
+    // Chunked: the collision runs vectorised over up to 128 nodes reading the
     // 19 source streams directly (aligned, contiguous) and writing an
     // L1-resident buffer, which is then pushed out one population row at a
     // time (the push offsets make the destinations unaligned; row copies can
     // use streaming stores, see store_row).
-    constexpr int chunk = 64;
+    constexpr int chunk = 128;
     alignas(64) double fout[Q][chunk];
     alignas(64) double force[3][chunk];
     for (std::size_t c0 = begin; c0 < end; c0 += chunk) {
