@@ -33,8 +33,10 @@ public:
   /** Vector from b to a, shortest over periodic images. */
   Vec3 minimum_image(const Vec3& a, const Vec3& b) const {
     Vec3 d = a - b;
+    // Most separations (bonds, pairs) are well inside half a box: test first,
+    // round only when needed (the hot path of every bond loop).
     for (int i = 0; i < 3; ++i)
-      if (m_periodic[i])
+      if (m_periodic[i] && std::abs(d[i]) > 0.5 * m_length[i])
         d[i] -= m_length[i] * std::round(d[i] / m_length[i]);
     return d;
   }

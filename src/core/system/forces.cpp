@@ -29,7 +29,8 @@ void System::add_bonded_forces(Energies* e) {
                           for (std::size_t k = 0; k < idx.size(); ++k)
                             p.force[idx[k]] += f[k];
                           energy_sum += energy;
-                        });
+                        },
+                        e != nullptr);
           if (e) {
             e->bonded += energy_sum;
             e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;

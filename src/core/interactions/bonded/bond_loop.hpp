@@ -24,6 +24,7 @@ template <int K> struct BondInput {
   const double* reference = nullptr;  ///< per-bond reference values (or nullptr)
   int mol_id = 0;  ///< cell (molecule) of the first particle
   std::size_t bond_index = 0;
+  bool want_energy = true;  ///< false in the time-step loop: energies may be skipped
 };
 
 namespace detail {
@@ -44,12 +45,14 @@ void prepare_bonds(IA& ia, const BondGroup& group, ParticleStore& p, const BoxGe
     ia.prepare(group, p, box, comm);
 }
 
-/** Visit every bond: sink(local_indices, forces, energy, input). */
+/** Visit every bond: sink(local_indices, forces, energy, input). With
+ *  want_energy false (the time-step loop) interactions may skip their energy. */
 template <class IA, class Sink>
 void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
-                   const BoxGeometry& box, double time, Sink&& sink) {
+                   const BoxGeometry& box, double time, Sink&& sink, bool want_energy = true) {
   constexpr int K = IA::n_particles;
   BondInput<K> in;
+  in.want_energy = want_energy;
   std::array<int, K> idx;
   std::array<Vec3, K> f;
   const std::size_t n = group.size();

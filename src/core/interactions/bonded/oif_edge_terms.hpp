@@ -57,12 +57,14 @@ struct EdgeResult {
 
 /** Neo-Hookean stretching, eq. 3: F(A) = ks kappa(lambda) (l - l0) p_AB,
  *  E = ks l0^2 I(lambda). */
-inline EdgeResult stretching_neo_hookean(const Vec3& a, const Vec3& b, double l0, double ks) {
+inline EdgeResult stretching_neo_hookean(const Vec3& a, const Vec3& b, double l0, double ks,
+                                         bool with_energy = true) {
   const Vec3 ab = b - a;
   const double l = ab.norm();
   const double lambda = l / l0;
+  // the energy quadrature costs more than the force: skipped in the time-step loop
   return {ks * neo_hookean_kappa(lambda) * (l - l0) / l * ab,
-          ks * l0 * l0 * neo_hookean_energy_integral(lambda)};
+          with_energy ? ks * l0 * l0 * neo_hookean_energy_integral(lambda) : 0.0};
 }
 
 /** Linear stretching (eq. 3 with kappa = 1): F(A) = kslin (l - l0) p_AB,

@@ -87,7 +87,7 @@ struct OifLocalForces {
     if (ks != 0.0 || kslin != 0.0 || kvisc != 0.0) {
       oif::EdgeResult edge;
       if (ks != 0.0) {
-        const auto r = oif::stretching_neo_hookean(b, c, r0, ks);
+        const auto r = oif::stretching_neo_hookean(b, c, r0, ks, in.want_energy);
         edge.force_a += r.force_a;
         edge.energy += r.energy;
       }
