@@ -48,6 +48,24 @@ class ParticleApi(unittest.TestCase):
         p = self.system.part.add(pos=[3, 3, 3])
         self.assertEqual(p.id, 10)
 
+    def test_iteration_and_exclusions_do_not_outlive_particles(self):
+        s = self.system
+        s.part.add(pos=[[1, 1, 1], [1.5, 1, 1]])
+        self.assertEqual([p.id for p in s.part], [0, 1])
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=1.0, n=2.0, cutoff=1.0)
+        s.part.by_id(0).add_exclusion(1)
+        s.integrator.run(0, recalc_forces=True)
+        np.testing.assert_array_equal(s.part.by_id(0).f, [0, 0, 0])
+        s.part.clear()
+        s.part.add(pos=[[1, 1, 1], [1.5, 1, 1]])  # same ids, no exclusion
+        s.integrator.run(0, recalc_forces=True)
+        self.assertAlmostEqual(s.part.by_id(0).f[0], -2.0 / 0.5**3)
+        s.part.by_id(0).add_exclusion(1)
+        s.part.by_id(1).remove()
+        s.part.add(pos=[1.5, 1, 1], id=1)
+        s.integrator.run(0, recalc_forces=True)
+        self.assertAlmostEqual(s.part.by_id(0).f[0], -2.0 / 0.5**3)
+
     def test_unfolded_and_folded_positions(self):
         p = self.system.part.add(pos=[9.95, 5, 5], v=[1.0, 0, 0])
         self.system.integrator.run(10)  # moves 0.1: crosses x = 10

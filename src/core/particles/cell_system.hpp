@@ -48,6 +48,14 @@ public:
   bool excluded(int id1, int id2) const {
     return !m_exclusions.empty() && m_exclusions.count(key(id1, id2));
   }
+  void remove_exclusions_of(int pid) {
+    for (auto it = m_exclusions.begin(); it != m_exclusions.end();)
+      if (static_cast<int>(*it >> 32) == pid || static_cast<int>(*it & 0xffffffffu) == pid)
+        it = m_exclusions.erase(it);
+      else
+        ++it;
+    invalidate();
+  }
   void clear_exclusions() {
     m_exclusions.clear();
     invalidate();

@@ -61,6 +61,7 @@ int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass,
 void System::remove_particle(int pid) {
   checked_index(pid);
   particles.remove(pid);
+  cells.remove_exclusions_of(pid);  // a new particle may reuse the id
   for (auto& entry : bonded) {
     auto& g = entry.bonds;
     BondGroup kept;
@@ -83,6 +84,7 @@ void System::remove_particle(int pid) {
 
 void System::clear_particles() {
   particles.clear();
+  cells.clear_exclusions();  // new particles may reuse the ids
   for (auto& entry : bonded) {
     entry.bonds.ids.clear();
     entry.bonds.per_bond.clear();

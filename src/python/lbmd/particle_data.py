@@ -293,6 +293,10 @@ class ParticleList:
     def __len__(self):
         return int(self._core.n_particles())
 
+    def __iter__(self):
+        """Handles of all particles, by increasing id (ESPResSo: ``for p in system.part``)."""
+        return iter(self.all())
+
     def add_bonds(self, bond, ids, per_bond=None):
         """Bulk bonds: ids is an M×k array of particle ids, one row per bond
         (owner first); per_bond an M×s array of per-bond reference values for
