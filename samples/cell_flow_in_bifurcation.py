@@ -13,18 +13,19 @@ z = H-1..H (channel height 20 in the paper, --height); the parent channel
 x = 110. Cells: Evans-Fung RBCs of radius 3.91 with 374 nodes and the paper's
 moduli (ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9); the rare cell a sphere
 of radius 7.5 (--full) with 642 nodes, 10x stiffer. Seeded at random in the
-parent channel (oif.seed_cells). Default: 8 RBCs, channel height 14, a short
-run (minutes); --full: the paper's 40 RBCs, height 20 and the rare cell.
+parent channel just upstream of the split (oif.seed_cells). Default: 6 RBCs,
+channel height 14, 8 cycles of 500 steps (a few minutes on one core); --full:
+the paper's 40 RBCs, height 20, the rare cell and 200 cycles.
 
 Output in DIR: cells.csv (time, cell, type, x, y, z, surface, volume,
 diameter per cycle), branches.csv (which branch each cell entered), and with
 --vtk the membranes and the geometry as VTK for ParaView. At the end the share
 of cells that entered each branch is printed (the paper's Fig 3 quantity).
 
-Known limitation (21 Nov 2026): with the default driving, an RBC pressed
-onto a corner of the rectangular island can be pushed through the node-wall
-soft sphere after about 600 us (SimulationInstability naming the node); run
-with a smaller --force (slower flow) or a rounded island until this is fixed.
+The corners that face the flow (the island's, and where the parent channel
+widens into the branches and narrows again) are rounded with radius 2: a
+membrane driven onto a sharp corner wraps around it until a node is pushed
+through the wall.
 """
 import argparse
 import csv
@@ -43,7 +44,7 @@ ap.add_argument("--cells", type=int, default=None, help="number of RBCs (default
 ap.add_argument("--rare", action="store_true", help="add the stiff rare cell")
 ap.add_argument("--full", action="store_true", help="the paper's sizes (slow: hours)")
 ap.add_argument("--height", type=float, default=None, help="channel height (default 14, --full 20)")
-ap.add_argument("--cycles", type=int, default=20)
+ap.add_argument("--cycles", type=int, default=None, help="output cycles (default 8, --full 200)")
 ap.add_argument("--steps", type=int, default=500, help="MD steps per cycle (time step 0.1 us)")
 ap.add_argument("--output", default="output_bifurcation")
 ap.add_argument("--vtk", action="store_true", help="write VTK of the membranes every cycle")
@@ -52,7 +53,8 @@ ap.add_argument("--force", type=float, default=1e-2,
                 help="body force density driving the flow (default: centre speed ~0.05 um/us so that cells "
                      "reach the branches within the default run; the paper's 1.3e-3 um/us is ~40x slower)")
 args = ap.parse_args()
-n_rbc = args.cells if args.cells is not None else (40 if args.full else 8)
+n_rbc = args.cells if args.cells is not None else (40 if args.full else 6)
+n_cycles = args.cycles if args.cycles is not None else (200 if args.full else 8)
 height = args.height or (20.0 if args.full else 14.0)
 rare = args.rare or args.full
 os.makedirs(args.output, exist_ok=True)
@@ -65,22 +67,50 @@ system = lbmd.System(box_l=[L_X, L_Y, height + 2.0])
 system.time_step = 0.1
 system.cell_system.skin = 0.3
 
-# --- geometry: slabs as rhomboids (fluid outside, direction=1) and two walls
+# --- geometry: blocks (fluid outside) extruded over the box height, and two walls
+H_BOX = height + 2.0
+R_CORNER = 2.0
+
+
+def block(x0, x1, y0, y1, rounded=()):
+    """Rectangle [x0, x1] x [y0, y1] over the box height, its corners named in
+    `rounded` ('ll', 'lr', 'ul', 'ur': lower/upper, left/right) rounded with
+    radius R_CORNER: a union of two overlapping bars, a square at each sharp
+    corner and a cylinder at each rounded one."""
+    r = R_CORNER
+    box = lambda a0, a1, b0, b1: shapes.Rhomboid(corner=[a0, b0, 0.0], a=[a1 - a0, 0, 0], b=[0, b1 - b0, 0],
+                                                  c=[0, 0, H_BOX], direction=1)
+    parts = [box(x0 + r, x1 - r, y0, y1), box(x0, x1, y0 + r, y1 - r)]
+    for name, (cx, cy, sx, sy) in {"ll": (x0, y0, 1, 1), "lr": (x1, y0, -1, 1),
+                                   "ul": (x0, y1, 1, -1), "ur": (x1, y1, -1, -1)}.items():
+        if name in rounded:
+            parts.append(shapes.Cylinder(center=[cx + sx * r, cy + sy * r, 0.5 * H_BOX], axis=[0, 0, 1],
+                                         radius=r, length=H_BOX))
+        else:
+            parts.append(box(min(cx, cx + sx * r), max(cx, cx + sx * r), min(cy, cy + sy * r),
+                             max(cy, cy + sy * r)))
+    return shapes.Union(shapes=parts), (x0, x1, y0, y1)
+
+
+island = (1.0 + w_low, L_Y - 1.0 - w_up)
 blocks = [
-    ([0.0, 0.0, 0.0], [SPLIT, 0, 0], [0, PARENT[0], 0]),            # parent, below
-    ([0.0, PARENT[1], 0.0], [SPLIT, 0, 0], [0, L_Y - PARENT[1], 0]),  # parent, above
-    ([JOIN, 0.0, 0.0], [L_X - JOIN, 0, 0], [0, PARENT[0], 0]),       # outlet, below
-    ([JOIN, PARENT[1], 0.0], [L_X - JOIN, 0, 0], [0, L_Y - PARENT[1], 0]),
-    ([SPLIT, 0.0, 0.0], [JOIN - SPLIT, 0, 0], [0, 1.0, 0]),          # branch outer walls
-    ([SPLIT, L_Y - 1.0, 0.0], [JOIN - SPLIT, 0, 0], [0, 1.0, 0]),
-    ([SPLIT, 1.0 + w_low, 0.0], [JOIN - SPLIT, 0, 0], [0, L_Y - 2.0 - w_low - w_up, 0]),  # island
+    block(0.0, SPLIT, 0.0, PARENT[0], rounded=("ur",)),          # parent, below
+    block(0.0, SPLIT, PARENT[1], L_Y, rounded=("lr",)),          # parent, above
+    block(JOIN, L_X, 0.0, PARENT[0], rounded=("ul",)),           # outlet, below
+    block(JOIN, L_X, PARENT[1], L_Y, rounded=("ll",)),           # outlet, above
+    (shapes.Rhomboid(corner=[SPLIT - 1.0, 0.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
+                     c=[0, 0, H_BOX]), None),                    # branch outer walls
+    (shapes.Rhomboid(corner=[SPLIT - 1.0, L_Y - 1.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
+                     c=[0, 0, H_BOX]), None),
+    block(SPLIT, JOIN, island[0], island[1], rounded=("ll", "lr", "ul", "ur")),  # island
 ]
 boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(height + 1.0))]
-for corner, a, b in blocks:
-    rh = shapes.Rhomboid(corner=corner, a=a, b=b, c=[0, 0, height + 2.0], direction=1)
-    boundaries.append(rh)
-    if args.vtk:
-        oif.output_vtk_rhomboid(rh, os.path.join(args.output, f"block_{len(boundaries)}.vtk"))
+for k, (shape, extent) in enumerate(blocks):
+    boundaries.append(shape)
+    if args.vtk:  # ParaView outline: the block's bounding rhomboid
+        x0, x1, y0, y1 = extent if extent else (SPLIT - 1.0, JOIN + 1.0, 0.0, 1.0)
+        oif.output_vtk_rhomboid(SimpleNamespace(corner=[x0, y0, 0.0], a=[x1 - x0, 0, 0], b=[0, y1 - y0, 0],
+                                                c=[0, 0, H_BOX]), os.path.join(args.output, f"block_{k}.vtk"))
 if args.vtk:
     for name, z in (("bottom", 0.0), ("top", height + 1.0)):
         oif.output_vtk_rhomboid(SimpleNamespace(corner=[0, 0, z], a=[L_X, 0, 0], b=[0, L_Y, 0], c=[0, 0, 1.0]),
@@ -97,7 +127,7 @@ if rare:
     types.append(rare_type)
     counts.append(1)
     ptypes.append(1)
-region = ([2.0, PARENT[0], 1.0], [SPLIT - 6.0, PARENT[1], height + 1.0])  # seed in the parent channel
+region = ([SPLIT - 30.0, PARENT[0], 1.0], [SPLIT - 3.0, PARENT[1], height + 1.0])  # just upstream of the split
 cells = oif.seed_cells(system, types, counts=counts, boundaries=boundaries, region=region,
                        particle_types=ptypes, seed=args.seed)
 print(f"case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches {w_low}/{w_up}, "
@@ -118,19 +148,18 @@ for t in set(ptypes):
             system.non_bonded_inter[t, u].membrane_collision.set_params(a=0.01, n=4.0, cutoff=0.8, offset=0.0)
 
 # --- run
-branch = {}  # cell index -> "lower"/"upper", decided when the centre passes the middle of the branches
-mid_x = 0.5 * (SPLIT + JOIN)
+branch = {}  # cell index -> "lower"/"upper", decided when the centre is inside the branches
 with open(os.path.join(args.output, "cells.csv"), "w", newline="") as f:
     out = csv.writer(f)
     out.writerow(["time", "cell", "type", "x", "y", "z", "surface", "volume", "diameter"])
-    for i in range(args.cycles + 1):
+    for i in range(n_cycles + 1):
         if i:
             system.integrator.run(args.steps)
         for k, c in enumerate(cells):
             x, y, z = c.get_origin_folded()
             out.writerow([f"{system.time:.1f}", k, c.particle_type, f"{x:.3f}", f"{y:.3f}", f"{z:.3f}",
                           f"{c.surface():.3f}", f"{c.volume():.3f}", f"{c.diameter():.3f}"])
-            if SPLIT < x < JOIN and abs(x - mid_x) < 10.0 and k not in branch:
+            if SPLIT + 8.0 < x < JOIN and k not in branch:
                 branch[k] = "lower" if y < 1.0 + w_low + 0.5 * (L_Y - 2.0 - w_low - w_up) else "upper"
             if args.vtk:
                 c.output_vtk_pos_folded(os.path.join(args.output, f"cell{k}_{i}.vtk"))
