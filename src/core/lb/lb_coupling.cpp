@@ -2,6 +2,7 @@
 
 #include "utils/random.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -18,19 +19,26 @@ struct Stencil {
 
 Stencil stencil(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
   const Vec3 p = box.folded(pos) / fluid.agrid() - Vec3::Constant(0.5);
-  int lo[3];
+  const Vec3i& n = fluid.grid();
+  int node[3][2];  // the two node indices per axis, folded into [0, N)
   double frac[3];
   for (int d = 0; d < 3; ++d) {
     const double fl = std::floor(p[d]);
-    lo[d] = static_cast<int>(fl);
+    int lo = static_cast<int>(fl);
     frac[d] = p[d] - fl;
+    // p lies in [-0.5, N - 0.5), so lo in [-1, N - 1] (N when round-off puts
+    // a folded position at L): fold without a division
+    if (lo >= n[d])
+      lo -= n[d];
+    node[d][0] = lo < 0 ? lo + n[d] : lo;
+    node[d][1] = lo + 1 >= n[d] ? lo + 1 - n[d] : lo + 1;
   }
   Stencil s;
   int m = 0;
   for (int dx = 0; dx < 2; ++dx)
     for (int dy = 0; dy < 2; ++dy)
       for (int dz = 0; dz < 2; ++dz, ++m) {
-        s.node[m] = fluid.padded_index(lo[0] + dx, lo[1] + dy, lo[2] + dz);
+        s.node[m] = fluid.padded_index_in_box(node[0][dx], node[1][dy], node[2][dz]);
         s.weight[m] = (dx ? frac[0] : 1.0 - frac[0]) * (dy ? frac[1] : 1.0 - frac[1]) *
                       (dz ? frac[2] : 1.0 - frac[2]);
       }
@@ -64,6 +72,23 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   ledger.step = step;
   ledger.last.clear();
   ledger.in_flight.setZero();
+  // fresh velocity cache for this pass (the fluid may have changed since the last)
+  if (ledger.velocity_stamp.size() != fluid.n_padded_slots()) {
+    ledger.velocity_stamp.assign(fluid.n_padded_slots(), 0);
+    ledger.velocity_cache.resize(fluid.n_padded_slots());
+    ledger.stamp = 0;
+  }
+  if (++ledger.stamp == 0) {
+    std::fill(ledger.velocity_stamp.begin(), ledger.velocity_stamp.end(), 0);
+    ledger.stamp = 1;
+  }
+  auto node_velocity = [&](std::size_t node) -> const Vec3& {
+    if (ledger.velocity_stamp[node] != ledger.stamp) {
+      ledger.velocity_cache[node] = fluid.velocity_at_index(node);
+      ledger.velocity_stamp[node] = ledger.stamp;
+    }
+    return ledger.velocity_cache[node];
+  };
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
@@ -72,7 +97,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     const Stencil s = stencil(fluid, box, p.pos[i]);
     Vec3 u = Vec3::Zero();
     for (int m = 0; m < 8; ++m)
-      u += s.weight[m] * fluid.velocity_at_index(s.node[m]);
+      u += s.weight[m] * node_velocity(s.node[m]);
     Vec3 f = params.gamma * (u - p.vel[i]);
     if (noise > 0.0) {
       key.key = static_cast<std::uint64_t>(p.id[i]);

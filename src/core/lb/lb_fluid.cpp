@@ -419,7 +419,8 @@ void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
       f.assign(m_stride, 0.0);
   m_field_used = true;
   // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
-  const double scale = m_p.tau / std::pow(m_p.agrid, 4);
+  const double a2 = m_p.agrid * m_p.agrid;
+  const double scale = m_p.tau / (a2 * a2);
   for (int d = 0; d < 3; ++d)
     m_field[d][n] += impulse[d] * scale;
 }

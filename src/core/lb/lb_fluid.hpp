@@ -124,6 +124,10 @@ public:
   // --- particle coupling (lattice indices are padded node indices) -----------
   /** Padded index of lattice node (i, j, k), folded periodically. */
   std::size_t padded_index(int i, int j, int k) const;
+  /** Padded index of a node already in [0, N) on every axis (no folding). */
+  std::size_t padded_index_in_box(int i, int j, int k) const { return index(i + 1, j + 1, k + 1); }
+  /** Number of padded node slots (bound of every padded index). */
+  std::size_t n_padded_slots() const { return m_stride; }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
   Vec3 velocity_at_index(std::size_t n) const;
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
@@ -142,6 +146,12 @@ public:
     std::uint64_t step = 0;
     std::vector<std::pair<std::size_t, Vec3>> last; ///< node, full impulse of the last call
     Vec3 in_flight = Vec3::Zero();                  ///< impulse deposited, not yet on particles
+    /// Node velocities computed in the current coupling pass: each lattice
+    /// node serves several membrane nodes, and its 19 populations lie in 19
+    /// different streams, so computing it once per pass saves most misses.
+    std::vector<Vec3> velocity_cache;
+    std::vector<std::uint32_t> velocity_stamp;
+    std::uint32_t stamp = 0;
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
 
