@@ -177,29 +177,36 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   return {rho, u2};
 }
 
-/** dst[0..len) = src[0..len). With AVX-512, the 64-byte-aligned part of the
- *  destination is written with non-temporal stores: the populations are not
- *  read again before the next update, and streaming stores save the
- *  read-for-ownership of each destination line (a third of the traffic).
- *  Only for lattices larger than the caches (`streaming`): a small lattice
- *  stays cache-resident, where streaming stores would evict it. */
-inline void store_row(double* __restrict dst, const double* __restrict src, int len,
-                      bool streaming) {
-  int i = 0;
+/** Stores src[from..to) of a row of post-collision populations to
+ *  dst[from..to); returns how far the row is stored. With AVX-512 and
+ *  `streaming` (lattices larger than the caches), the 64-byte-aligned part of
+ *  the destination is written with non-temporal stores: the populations are
+ *  not read again before the next update, and streaming stores save the
+ *  read-for-ownership of each destination line (a third of the traffic). Then
+ *  only whole destination lines are written until the `last` call of the row,
+ *  which writes the rest: a partial line written with streaming stores would
+ *  cost a read-modify-write in memory. */
+inline int store_row_part(double* __restrict dst, const double* __restrict src, int from, int to,
+                          bool last, bool streaming) {
+  int i = from;
 #ifdef __AVX512F__
   if (streaming) {
-    while (i < len && (reinterpret_cast<std::uintptr_t>(dst + i) & 63u) != 0) {
+    while (i < to && (reinterpret_cast<std::uintptr_t>(dst + i) & 63u) != 0) {
       dst[i] = src[i];
       ++i;
     }
-    for (; i + 8 <= len; i += 8)
+    for (; i + 8 <= to; i += 8)
       _mm512_stream_pd(dst + i, _mm512_loadu_pd(src + i));
+    if (!last)
+      return i;
   }
 #else
   (void)streaming;
+  (void)last;
 #endif
-  for (; i < len; ++i)
+  for (; i < to; ++i)
     dst[i] = src[i];
+  return i;
 }
 
 } // namespace
@@ -228,8 +235,15 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
     constexpr int chunk = 128;
     alignas(64) double fout[Q][chunk];
     alignas(64) double force[3][chunk];
+    constexpr int block = 32; // sub-block: prefetch, collide, store
+    // the run after this one (runs are in memory order), for the prefetch
+    const Run* next_run = &r + 1 < m_runs.data() + m_runs.size() ? &r + 1 : nullptr;
     for (std::size_t c0 = begin; c0 < end; c0 += chunk) {
       const int len = static_cast<int>(std::min<std::size_t>(chunk, end - c0));
+      // where the next chunk's 19 source rows start: the hardware prefetcher
+      // does not keep 19 streams far enough ahead, so while this chunk is
+      // collided, the next one is requested into L2 a few lines at a time
+      const std::size_t next = c0 + chunk < end ? c0 + chunk : next_run ? next_run->start : c0;
       for (int i = 0; i < len; ++i) {
         force[0][i] = fx;
         force[1][i] = fy;
@@ -242,21 +256,31 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
           force[2][i] += gz[c0 + i];
         }
       }
+      // the stores of a sub-block are issued right after its collision, so
+      // that the memory sees reads and writes interleaved (as in a copy)
+      // instead of a read phase and a write phase per chunk
+      int stored[Q] = {};
+      for (int b = 0; b < len; b += block) {
+        for (int q = 0; q < Q; ++q)
+          for (int p = 0; p < block; p += 8)
+            __builtin_prefetch(src + q * S + next + b + p, 0, 2); // to L2
+        const int e = std::min(b + block, len);
 #pragma GCC ivdep
-      for (int i = 0; i < len; ++i) {
-        double f[Q], out[Q];
+        for (int i = b; i < e; ++i) {
+          double f[Q], out[Q];
 #pragma GCC unroll 19
-        for (int q = 0; q < Q; ++q)
-          f[q] = src[q * S + c0 + i];
-        const double F[3] = {force[0][i], force[1][i], force[2][i]};
-        const NodeResult res = collide<ghosts_relaxed>(f, F, l, out);
+          for (int q = 0; q < Q; ++q)
+            f[q] = src[q * S + c0 + i];
+          const double F[3] = {force[0][i], force[1][i], force[2][i]};
+          const NodeResult res = collide<ghosts_relaxed>(f, F, l, out);
 #pragma GCC unroll 19
+          for (int q = 0; q < Q; ++q)
+            fout[q][i] = out[q];
+          bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+        }
         for (int q = 0; q < Q; ++q)
-          fout[q][i] = out[q];
-        bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+          stored[q] = store_row_part(dst + off[q] + c0, fout[q], stored[q], e, e == len, streaming);
       }
-      for (int q = 0; q < Q; ++q)
-        store_row(dst + off[q] + c0, fout[q], len, streaming);
     }
   } else {
     const std::uint64_t counter = m_updates;
