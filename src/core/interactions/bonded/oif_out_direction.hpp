@@ -13,6 +13,8 @@
 #include "interactions/bonded/oif_cell_sums.hpp"
 
 #include <array>
+#include <cstdint>
+#include <vector>
 
 namespace pyoif {
 
@@ -21,7 +23,14 @@ struct OifOutDirection {
   static constexpr int n_particles = 3;
   static constexpr int per_bond_stride = 0;
 
-  oif::CellSums sums; ///< per-cell sums, filled by prepare()
+  oif::CellSums sums; ///< per-cell sums of the last orientation check
+
+  /** The orientation of a cell's triangles is fixed by its mesh, so it is
+   *  determined once per set of bonds (keyed by a checksum of the bond ids)
+   *  rather than from a full area/volume pass every step. */
+  std::uint64_t m_bonds_key = 0;
+  std::vector<double> m_sign;  ///< +1/-1 per bond: flips the normal outward
+  std::vector<int> m_nodes;    ///< ids of the nodes that get a normal, each once
 
   void prepare(const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
                const Communicator& comm);
