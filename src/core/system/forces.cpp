@@ -9,9 +9,8 @@
 namespace pyoif {
 
 void System::prepare_step() {
-  double max_cut = nonbonded.max_range();
   if (cells.needs_rebuild(particles, time))
-    cells.rebuild(particles, box, max_cut);
+    cells.rebuild(particles, box, nonbonded.max_range());
   else
     cells.update_ghosts(particles, box);
 }

@@ -49,14 +49,19 @@ class NonBondedModel:
         return f"{self.name}[{self._types[0]}, {self._types[1]}]({self.get_params()})"
 
 
+def _contact_params(n_check, n_doc):
+    """The parameters shared by the contact models: a, n, cutoff, offset."""
+    return [Param("a", "float", check=non_negative, doc="energy scale"),
+            Param("n", "float", check=n_check, doc=n_doc),
+            Param("cutoff", "float", check=non_negative, doc="range beyond offset"),
+            Param("offset", "float", 0.0, check=non_negative, doc="distance shift")]
+
+
 class SoftSphereInteraction(NonBondedModel):
     """V(r) = a (r - offset)^-n for r < cutoff + offset (model eq. 8)."""
 
     name = "soft_sphere"
-    _params = [Param("a", "float", check=non_negative, doc="energy scale"),
-               Param("n", "float", check=non_negative, doc="exponent"),
-               Param("cutoff", "float", check=non_negative, doc="range beyond offset"),
-               Param("offset", "float", 0.0, check=non_negative, doc="distance shift")]
+    _params = _contact_params(non_negative, "exponent")
     _core_params = staticmethod(_lbmd.SoftSphereParams)
 
 
@@ -69,10 +74,7 @@ class MembraneCollisionInteraction(NonBondedModel):
     the membranes have crossed, and then the force pulls the node back."""
 
     name = "membrane_collision"
-    _params = [Param("a", "float", check=non_negative, doc="energy scale"),
-               Param("n", "float", check=positive, doc="steepness (1/length)"),
-               Param("cutoff", "float", check=non_negative, doc="range beyond offset"),
-               Param("offset", "float", 0.0, check=non_negative, doc="distance shift")]
+    _params = _contact_params(positive, "steepness (1/length)")
     _core_params = staticmethod(_lbmd.MembraneCollisionParams)
 
 

@@ -58,13 +58,13 @@ public:
     PairParams& e = at(t1, t2);
     e.update_range();
     at(t2, t1) = e;
+    m_max_range = 0.0;
+    for (const auto& entry : m_entries)
+      m_max_range = std::max(m_max_range, entry.range);
   }
-  double max_range() const {
-    double r = 0.0;
-    for (const auto& e : m_entries)
-      r = std::max(r, e.range);
-    return r;
-  }
+  /** Largest active cutoff over all type pairs (kept up to date by commit(),
+   *  read every step by the neighbour search). */
+  double max_range() const { return m_max_range; }
   int n_types() const { return m_n_types; }
 
 private:
@@ -82,6 +82,7 @@ private:
   }
   int m_n_types = 0;
   std::vector<PairParams> m_entries;
+  double m_max_range = 0.0;
 };
 
 /** Force on i from all active models of one entry, and optionally the energy. */
