@@ -169,7 +169,6 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
   m_stride = ((nodes + 7) / 8) * 8;
   m_f = allocate(Q * m_stride);
-  m_next = allocate(Q * m_stride);
   m_flag.assign(nodes, 0);
   set_n_threads(p.n_threads);
   for (int x = 1; x <= m_n[0]; ++x)
@@ -182,7 +181,26 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
 
 LBFluid::~LBFluid() {
   std::free(m_f);
-  std::free(m_next);
+}
+
+void LBFluid::normalize_layout() {
+  if (!m_swapped)
+    return;
+  // pre-collision populations of every fluid node, gathered from their
+  // swapped places, then written back at (q, node); solid nodes hold none
+  std::vector<double> gathered(Q * m_n_fluid);
+  std::size_t k = 0;
+  for (const Run& r : m_runs)
+    for (int i = 0; i < r.length; ++i, ++k)
+      for (int q = 0; q < Q; ++q)
+        gathered[Q * k + q] = m_f[population_slot(q, r.start + i)];
+  m_swapped = false;
+  std::fill(m_f, m_f + Q * m_stride, 0.0);
+  k = 0;
+  for (const Run& r : m_runs)
+    for (int i = 0; i < r.length; ++i, ++k)
+      for (int q = 0; q < Q; ++q)
+        m_f[population_slot(q, r.start + i)] = gathered[Q * k + q];
 }
 
 void LBFluid::set_n_threads(int n) {
@@ -230,6 +248,7 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
     require(b.shape != nullptr, "LBBoundary: shape must be set");
     require(b.velocity.allFinite(), "LBBoundary: velocity must be finite");
   }
+  normalize_layout();
   const std::vector<std::uint16_t> old_flag = m_flag;
   m_boundaries = boundaries;
   std::fill(m_flag.begin(), m_flag.end(), 0);
@@ -315,7 +334,7 @@ Vec3 LBFluid::boundary_force(int b) const {
   for (const Link& l : m_links) {
     if (l.boundary != b)
       continue;
-    const double back = m_f[opposite(l.q) * m_stride + l.node];
+    const double back = m_f[population_slot(opposite(l.q), l.node)];
     const double transfer = 2.0 * back + l.wall_term;
     for (int d = 0; d < 3; ++d)
       sum[d] += c[l.q][d] * transfer;
@@ -340,7 +359,7 @@ void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
   rho = 0.0;
   j.setZero();
   for (int q = 0; q < Q; ++q) {
-    const double f = m_f[q * m_stride + n];
+    const double f = m_f[population_slot(q, n)];
     rho += f;
     for (int d = 0; d < 3; ++d)
       j[d] += c[q][d] * f;
@@ -378,7 +397,7 @@ Populations LBFluid::node_populations(const Vec3i& node) const {
   const std::size_t n = checked_node(node);
   Populations f;
   for (int q = 0; q < Q; ++q)
-    f[q] = m_f[q * m_stride + n];
+    f[q] = m_f[population_slot(q, n)];
   return f;
 }
 
@@ -388,7 +407,7 @@ Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
   for (int q = 0; q < Q; ++q)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
-        pi(a, b) += c[q][a] * c[q][b] * m_f[q * m_stride + n];
+        pi(a, b) += c[q][a] * c[q][b] * m_f[population_slot(q, n)];
   const double scale = m_p.agrid * m_p.agrid / (m_p.tau * m_p.tau);
   return pi * scale;
 }
@@ -396,10 +415,10 @@ Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
 void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the populations of a boundary node");
-  for (int q = 0; q < Q; ++q) {
+  for (int q = 0; q < Q; ++q)
     require(std::isfinite(f[q]), "population: values must be finite");
-    m_f[q * m_stride + n] = f[q];
-  }
+  for (int q = 0; q < Q; ++q)
+    m_f[population_slot(q, n)] = f[q];
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
@@ -410,7 +429,7 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
   // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
   const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
   for (int q = 0; q < Q; ++q)
-    m_f[q * m_stride + n] = equilibrium(q, rho, u_lattice);
+    m_f[population_slot(q, n)] = equilibrium(q, rho, u_lattice);
 }
 
 void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
@@ -429,7 +448,7 @@ double LBFluid::total_mass() const {
   double mass = 0.0;
   for (const Run& r : m_runs)
     for (int q = 0; q < Q; ++q) {
-      const double* f = m_f + q * m_stride + r.start;
+      const double* f = m_f + population_slot(q, r.start);
       for (int i = 0; i < r.length; ++i)
         mass += f[i];
     }
@@ -440,7 +459,7 @@ Vec3 LBFluid::total_momentum() const {
   Vec3 j = Vec3::Zero();
   for (const Run& r : m_runs) {
     for (int q = 1; q < Q; ++q) {
-      const double* f = m_f + q * m_stride + r.start;
+      const double* f = m_f + population_slot(q, r.start);
       double s = 0.0;
       for (int i = 0; i < r.length; ++i)
         s += f[i];

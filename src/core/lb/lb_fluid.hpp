@@ -4,14 +4,25 @@
 // f[q * stride + n], padded node index n = (x * Py + y) * Pz + z with
 // x, y, z in [0, N + 1] (0 and N + 1 are the ghost layer; the lattice node
 // (i, j, k) of the domain is padded node (i + 1, j + 1, k + 1) and sits at
-// position ((i, j, k) + 1/2) * agrid). The stored populations are the
-// pre-collision (post-streaming) ones, so every node property is local.
+// position ((i, j, k) + 1/2) * agrid).
 //
-// One update (step()): a fused collide-and-push kernel over the fluid nodes
-// only (contiguous runs along z), a halo exchange that folds what was pushed
-// into the ghost layer back into the domain (periodicity, and the place where
-// an MPI exchange would go), and halfway bounce-back on the precomputed
-// fluid-solid links (Ladd 1994, moving walls by the momentum term).
+// One lattice, updated in place with the AA access pattern (Bailey, Myre,
+// Walsh, Lilja & Saar, ICPP 2009): every node reads and writes the same 19
+// memory places within one update, so there is no second lattice and no
+// write-allocate traffic, and nodes never race under OpenMP.
+//   even update: read f_q at the node itself, collide, write f*_q into the
+//     node's own slot of the opposite direction -q ("swapped" state);
+//   odd update: read the incoming f_q from slot -q of node x - c_q, collide,
+//     push f*_q into slot q of node x + c_q ("normal" state again).
+// In the normal state the pre-collision f_q of node x is at (q, x); in the
+// swapped state it is at (-q, x - c_q), see population_slot(). Every node
+// access goes through population_slot(), so users never see the difference.
+// After an even update the ghost layer is filled from the periodic images
+// (the odd update reads it); after an odd update what was pushed into the
+// ghost layer is folded back into the domain. Halfway bounce-back on the
+// precomputed fluid-solid links (Ladd 1994, moving walls by the momentum
+// term) follows either halo step. The ghost exchange is where an MPI
+// exchange would go.
 //
 // Units: populations are mass densities (the unit of `dens`); velocities in
 // the kernel are lattice velocities u * tau / agrid, force densities are
@@ -174,11 +185,26 @@ private:
   }
   std::size_t checked_node(const Vec3i& node) const;
   void rebuild_geometry();
-  void halo_exchange(double* f) const;
   void apply_bounce_back(double* f) const;
-  template <bool thermal, bool with_field, bool ghosts_relaxed>
-  bool update_run(const Run& r, const double* src, double* dst) const;
-  void report_instability(const Run& r) const;
+  /** Where an update found a node out of the model's range. */
+  struct BadNode {
+    std::size_t node = 0;
+    double rho = 0.0, speed = 0.0;
+  };
+  /** Offset into m_f of the pre-collision population q of padded node n
+   *  (fluid node, or a domain node of any kind in the normal state). */
+  std::size_t population_slot(int q, std::size_t n) const {
+    return m_swapped ? static_cast<std::size_t>(d3q19::opposite(q)) * m_stride + n - m_offset[q]
+                     : static_cast<std::size_t>(q) * m_stride + n;
+  }
+  /** Rewrites a swapped lattice in the normal layout (rare: geometry changes). */
+  void normalize_layout();
+  /** fill_ghosts: copy the domain into the ghost layer (after an even update);
+   *  else fold the ghost layer into the domain (after an odd update). */
+  void halo_exchange(double* f, bool fill_ghosts) const;
+  template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
+  bool update_run(const Run& r, double* f, BadNode& bad) const;
+  [[noreturn]] void report_instability(const BadNode& bad) const;
   void moments(std::size_t n, double& rho, Vec3& j) const;
 
   LBParams m_p;
@@ -186,8 +212,8 @@ private:
   Vec3 m_box;
   Vec3i m_n, m_pad;
   std::size_t m_stride = 0;
-  double* m_f = nullptr;    ///< current populations, 19 * stride
-  double* m_next = nullptr; ///< update target
+  double* m_f = nullptr;  ///< populations, 19 * stride, updated in place
+  bool m_swapped = false; ///< after an odd number of updates (see top)
   std::vector<double> m_field[3];
   bool m_field_used = false;
   std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)

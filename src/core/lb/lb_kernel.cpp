@@ -1,5 +1,6 @@
-// The lattice update: fused collide-and-push over runs of fluid nodes, halo
-// exchange, halfway bounce-back. This is where a PyOIF run spends its time.
+// The lattice update: fused stream-and-collide over runs of fluid nodes, in
+// place with the AA pattern (lb_fluid.hpp), halo exchange, halfway
+// bounce-back. This is where a PyOIF run spends its time.
 //
 // Collision in population space, equivalent to the moment-space MRT of
 // Duenweg, Schiller & Ladd, Phys. Rev. E 76, 036704 (2007) (DSL) with
@@ -27,10 +28,6 @@
 #include <sstream>
 #include <type_traits>
 #include <utility>
-
-#ifdef __AVX512F__
-#include <immintrin.h>
-#endif
 
 #if defined(__AVX512F__) && !defined(__clang__)
 // 8-wide vectors halve the instruction count of the collision (32 registers)
@@ -177,73 +174,60 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   return {rho, u2};
 }
 
-/** Stores src[from..to) of a row of post-collision populations to
- *  dst[from..to); returns how far the row is stored. With AVX-512 and
- *  `streaming` (lattices larger than the caches), the 64-byte-aligned part of
- *  the destination is written with non-temporal stores: the populations are
- *  not read again before the next update, and streaming stores save the
- *  read-for-ownership of each destination line (a third of the traffic). Then
- *  only whole destination lines are written until the `last` call of the row,
- *  which writes the rest: a partial line written with streaming stores would
- *  cost a read-modify-write in memory. */
-inline int store_row_part(double* __restrict dst, const double* __restrict src, int from, int to,
-                          bool last, bool streaming) {
-  int i = from;
-#ifdef __AVX512F__
-  if (streaming) {
-    while (i < to && (reinterpret_cast<std::uintptr_t>(dst + i) & 63u) != 0) {
-      dst[i] = src[i];
-      ++i;
-    }
-    for (; i + 8 <= to; i += 8)
-      _mm512_stream_pd(dst + i, _mm512_loadu_pd(src + i));
-    if (!last)
-      return i;
-  }
-#else
-  (void)streaming;
-  (void)last;
-#endif
-  for (; i < to; ++i)
-    dst[i] = src[i];
-  return i;
-}
-
 } // namespace
 
-template <bool thermal, bool with_field, bool ghosts_relaxed>
-bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __restrict dst) const {
+template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
+bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
+  // AA pattern (see lb_fluid.hpp): population q of node n is read at
+  // f[read[q] + n] and its post-collision value written to f[write[q] + n];
+  // within one update each node reads and writes the same 19 places
+  // (write[q] = read[-q]), so the update is in place and race-free.
   const std::size_t S = m_stride;
+  std::ptrdiff_t read[Q], write[Q];
+  for (int q = 0; q < Q; ++q) {
+    const std::ptrdiff_t own = static_cast<std::ptrdiff_t>(q * S);
+    const std::ptrdiff_t opp = static_cast<std::ptrdiff_t>(opposite(q) * S);
+    read[q] = even ? own : opp - m_offset[q];
+    write[q] = even ? opp : own + m_offset[q];
+  }
   const Relaxation l = m_relax;
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
   const double* __restrict gx = with_field ? m_field[0].data() : nullptr;
   const double* __restrict gy = with_field ? m_field[1].data() : nullptr;
   const double* __restrict gz = with_field ? m_field[2].data() : nullptr;
-  std::ptrdiff_t off[Q];
-  for (int q = 0; q < Q; ++q)
-    off[q] = static_cast<std::ptrdiff_t>(q * S) + m_offset[q];
   const std::size_t begin = r.start, end = r.start + r.length;
-  // streaming stores once both population arrays exceed ~ the last-level cache
-  const bool streaming = 2 * Q * S * sizeof(double) > (std::size_t{32} << 20);
-  int bad = 0;
+  // a node out of range: its moments, recomputed from the populations that
+  // are still unwritten (the caller throws, the update is abandoned)
+  auto record_bad = [&](std::size_t n, const double* F) {
+    double fn[Q], out[Q];
+    for (int q = 0; q < Q; ++q)
+      fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
+    const NodeResult res = collide<false>(fn, F, l, out);
+    bad_node = {n, res.rho, std::sqrt(res.u2)};
+    return true;
+  };
   if constexpr (!thermal) {
-    // Chunked: the collision runs vectorised over up to 128 nodes reading the
-    // 19 source streams directly (aligned, contiguous) and writing an
-    // L1-resident buffer, which is then pushed out one population row at a
-    // time (the push offsets make the destinations unaligned; row copies can
-    // use streaming stores, see store_row).
-    constexpr int chunk = 128;
-    alignas(64) double fout[Q][chunk];
-    alignas(64) double force[3][chunk];
-    constexpr int block = 32; // sub-block: prefetch, collide, store
-    // the run after this one (runs are in memory order), for the prefetch
+    // Blocks of nodes: the collision runs vectorised over a block reading the
+    // 19 streams directly and writing an L1-resident buffer; the block is
+    // checked (density, speed) before anything is written back, so an
+    // unstable node is reported with its pre-collision state. The write-back
+    // goes to the lines just read (still in L1/L2).
+    constexpr int block = 32;
+    // the hardware prefetcher does not keep 19 streams far enough ahead:
+    // request the rows `distance` nodes ahead into L2 (in the next run when
+    // this one ends; runs are in memory order)
+    constexpr std::size_t distance = 96;
     const Run* next_run = &r + 1 < m_runs.data() + m_runs.size() ? &r + 1 : nullptr;
-    for (std::size_t c0 = begin; c0 < end; c0 += chunk) {
-      const int len = static_cast<int>(std::min<std::size_t>(chunk, end - c0));
-      // where the next chunk's 19 source rows start: the hardware prefetcher
-      // does not keep 19 streams far enough ahead, so while this chunk is
-      // collided, the next one is requested into L2 a few lines at a time
-      const std::size_t next = c0 + chunk < end ? c0 + chunk : next_run ? next_run->start : c0;
+    alignas(64) double fout[Q][block];
+    alignas(64) double force[3][block];
+    for (std::size_t b0 = begin; b0 < end; b0 += block) {
+      const int len = static_cast<int>(std::min<std::size_t>(block, end - b0));
+      std::size_t ahead = b0 + distance;
+      if (ahead >= end)
+        ahead = next_run ? next_run->start + (ahead - end) : b0;
+      for (int q = 0; q < Q; ++q)
+        for (int p = 0; p < block; p += 8)
+          __builtin_prefetch(f + read[q] + static_cast<std::ptrdiff_t>(ahead + p), 1, 2);
       for (int i = 0; i < len; ++i) {
         force[0][i] = fx;
         force[1][i] = fy;
@@ -251,51 +235,62 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
       }
       if constexpr (with_field) {
         for (int i = 0; i < len; ++i) {
-          force[0][i] += gx[c0 + i];
-          force[1][i] += gy[c0 + i];
-          force[2][i] += gz[c0 + i];
+          force[0][i] += gx[b0 + i];
+          force[1][i] += gy[b0 + i];
+          force[2][i] += gz[b0 + i];
         }
       }
-      // the stores of a sub-block are issued right after its collision, so
-      // that the memory sees reads and writes interleaved (as in a copy)
-      // instead of a read phase and a write phase per chunk
-      int stored[Q] = {};
-      for (int b = 0; b < len; b += block) {
-        for (int q = 0; q < Q; ++q)
-          for (int p = 0; p < block; p += 8)
-            __builtin_prefetch(src + q * S + next + b + p, 0, 2); // to L2
-        const int e = std::min(b + block, len);
+      const double* in[Q];
+      for (int q = 0; q < Q; ++q)
+        in[q] = f + read[q] + static_cast<std::ptrdiff_t>(b0);
+      int bad = 0;
 #pragma GCC ivdep
-        for (int i = b; i < e; ++i) {
-          double f[Q], out[Q];
+      for (int i = 0; i < len; ++i) {
+        double fn[Q], out[Q];
 #pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            f[q] = src[q * S + c0 + i];
-          const double F[3] = {force[0][i], force[1][i], force[2][i]};
-          const NodeResult res = collide<ghosts_relaxed>(f, F, l, out);
-#pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            fout[q][i] = out[q];
-          bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
-        }
         for (int q = 0; q < Q; ++q)
-          stored[q] = store_row_part(dst + off[q] + c0, fout[q], stored[q], e, e == len, streaming);
+          fn[q] = in[q][i];
+        const double F[3] = {force[0][i], force[1][i], force[2][i]};
+        const NodeResult res = collide<ghosts_relaxed>(fn, F, l, out);
+#pragma GCC unroll 19
+        for (int q = 0; q < Q; ++q)
+          fout[q][i] = out[q];
+        bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+      }
+      if (bad) {
+        for (int i = 0; i < len; ++i) {
+          const double F[3] = {force[0][i], force[1][i], force[2][i]};
+          double fn[Q], out[Q];
+          for (int q = 0; q < Q; ++q)
+            fn[q] = in[q][i];
+          const NodeResult res = collide<ghosts_relaxed>(fn, F, l, out);
+          if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
+            return record_bad(b0 + i, F);
+        }
+        return record_bad(b0, force[0]); // not reached: the block had a bad node
+      }
+      for (int q = 0; q < Q; ++q) {
+        double* __restrict dst = f + write[q] + static_cast<std::ptrdiff_t>(b0);
+        const double* __restrict src = fout[q];
+        for (int i = 0; i < len; ++i)
+          dst[i] = src[i];
       }
     }
   } else {
     const std::uint64_t counter = m_updates;
     for (std::size_t n = begin; n < end; ++n) {
-      double f[Q], out[Q];
+      double fn[Q], out[Q];
       for (int q = 0; q < Q; ++q)
-        f[q] = src[q * S + n];
+        fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
       double F[3] = {fx, fy, fz};
       if constexpr (with_field) {
         F[0] += gx[n];
         F[1] += gy[n];
         F[2] += gz[n];
       }
-      const NodeResult res = collide<false>(f, F, l, out);
-      bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+      const NodeResult res = collide<false>(fn, F, l, out);
+      if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
+        return record_bad(n, F);
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
       // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
       // the w-weighted basis; mass and momentum untouched
@@ -304,10 +299,9 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
       const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
       const random::Key key{m_p.seed, static_cast<std::uint64_t>(random::Stream::lb_fluid), counter,
                             (static_cast<std::uint64_t>(x) * m_n[1] + y) * m_n[2] + z};
-      const double rho_pos = res.rho > 0.0 ? res.rho : 0.0;
       double amp[Q];
       for (int m = 4; m < Q; ++m)
-        amp[m] = std::sqrt(rho_pos * m_noise_factor[m]) * random::normal(key, m);
+        amp[m] = std::sqrt(res.rho * m_noise_factor[m]) * random::normal(key, m);
       for (int q = 0; q < Q; ++q) {
         double sum = 0.0;
         for (int m = 4; m < Q; ++m)
@@ -315,16 +309,18 @@ bool LBFluid::update_run(const Run& r, const double* __restrict src, double* __r
         out[q] += w[q] * sum;
       }
       for (int q = 0; q < Q; ++q)
-        dst[off[q] + n] = out[q];
+        f[write[q] + static_cast<std::ptrdiff_t>(n)] = out[q];
     }
   }
-  return bad != 0;
+  return false;
 }
 
-void LBFluid::halo_exchange(double* f) const {
-  // Push streaming put the populations that left the domain into the ghost
-  // layer; fold them into the periodic image. Region o (26 of them) gets the
-  // populations whose velocity points into it: c_d = o_d wherever o_d != 0.
+void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+  // Region o of the ghost layer (26 of them) holds the populations whose
+  // velocity points into it (c_d = o_d wherever o_d != 0), at the ghosts that
+  // a domain node reaches with c_q. After an odd update they are what that
+  // node pushed out, folded here into the periodic image; after an even
+  // update the odd update will read them there, so they are filled from it.
   for (int ox = -1; ox <= 1; ++ox)
     for (int oy = -1; oy <= 1; ++oy)
       for (int oz = -1; oz <= 1; ++oz) {
@@ -364,80 +360,100 @@ void LBFluid::halo_exchange(double* f) const {
             for (int y = qlo[1]; y <= qhi[1]; ++y) {
               const std::size_t base = index(x, y, qlo[2]);
               const int len = qhi[2] - qlo[2] + 1;
-              for (int z = 0; z < len; ++z)
-                fq[base + z + delta] = fq[base + z];
+              if (fill_ghosts)
+                for (int z = 0; z < len; ++z)
+                  fq[base + z] = fq[base + z + delta];
+              else
+                for (int z = 0; z < len; ++z)
+                  fq[base + z + delta] = fq[base + z];
             }
         }
       }
 }
 
 void LBFluid::apply_bounce_back(double* f) const {
-  // The kernel pushed f_q* of a fluid node into the (unused) slot of its solid
-  // neighbour; send it back as f_{-q} (halfway bounce-back, Ladd 1994), with
-  // the moving-wall term -6 w_q rho0 c_q . u_wall.
-  for (const Link& l : m_links)
-    f[opposite(l.q) * m_stride + l.node] = f[l.q * m_stride + l.solid] - l.wall_term;
+  // Halfway bounce-back (Ladd 1994): f_q* that a fluid node sent towards its
+  // solid neighbour comes back as f_{-q}, less the moving-wall term
+  // 6 w_q rho0 c_q . u_wall. After an odd update f_q* was pushed into the
+  // solid node's slot q and goes to the fluid node's slot -q; after an even
+  // update it sits in the fluid node's slot -q and goes to the solid node's
+  // slot q, where the next (odd) update reads the fluid node's f_{-q}.
+  const std::size_t S = m_stride;
+  if (m_swapped)
+    for (const Link& l : m_links)
+      f[l.q * S + l.solid] = f[opposite(l.q) * S + l.node] - l.wall_term;
+  else
+    for (const Link& l : m_links)
+      f[opposite(l.q) * S + l.node] = f[l.q * S + l.solid] - l.wall_term;
 }
 
-void LBFluid::report_instability(const Run& r) const {
-  for (int i = 0; i < r.length; ++i) {
-    const std::size_t n = r.start + i;
-    double rho;
-    Vec3 j;
-    moments(n, rho, j);
-    const Vec3 u = (j + 0.5 * m_ext_lattice) / rho;
-    if (rho > 0.0 && u.squaredNorm() < u2_limit)
-      continue;
-    const int z = static_cast<int>(n % m_pad[2]) - 1;
-    const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
-    const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
-    std::ostringstream msg;
-    msg << "lattice-Boltzmann fluid unstable at node (" << x << ", " << y << ", " << z
-        << ") in lattice update " << m_updates << ": density " << rho
-        << ", speed |u| = " << u.norm()
-        << " lattice units (must stay well below the lattice sound speed 0.577); reduce the "
-           "forces or flow speed, or increase visc (relaxation rate "
-        << 1.0 - m_relax.shear << ")";
-    throw SimulationInstability(msg.str());
-  }
-  throw SimulationInstability("lattice-Boltzmann fluid unstable in lattice update " +
-                              std::to_string(m_updates));
+void LBFluid::report_instability(const BadNode& bad) const {
+  const std::size_t n = bad.node;
+  const int z = static_cast<int>(n % m_pad[2]) - 1;
+  const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
+  const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
+  std::ostringstream msg;
+  msg << "lattice-Boltzmann fluid unstable at node (" << x << ", " << y << ", " << z
+      << ") in lattice update " << m_updates << ": density " << bad.rho
+      << ", speed |u| = " << bad.speed
+      << " lattice units (must stay well below the lattice sound speed 0.577); reduce the "
+         "forces or flow speed, or increase visc (relaxation rate "
+      << 1.0 - m_relax.shear << ")";
+  throw SimulationInstability(msg.str());
 }
 
 void LBFluid::step() {
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;
+  const bool even = !m_swapped;
   const long n_runs = static_cast<long>(m_runs.size());
   long first_bad = n_runs;
-  const double* src = m_f;
-  double* dst = m_next;
+  BadNode bad_node;
+  double* f = m_f;
+  // one instantiation per combination, chosen outside the node loops
+  auto update = [&](const Run& r, BadNode& b) {
+    if (thermal) {
+      if (even)
+        return field ? update_run<true, true, false, true>(r, f, b)
+                     : update_run<true, false, false, true>(r, f, b);
+      return field ? update_run<true, true, false, false>(r, f, b)
+                   : update_run<true, false, false, false>(r, f, b);
+    }
+    if (relaxed) {
+      if (even)
+        return field ? update_run<false, true, true, true>(r, f, b)
+                     : update_run<false, false, true, true>(r, f, b);
+      return field ? update_run<false, true, true, false>(r, f, b)
+                   : update_run<false, false, true, false>(r, f, b);
+    }
+    if (even)
+      return field ? update_run<false, true, false, true>(r, f, b)
+                   : update_run<false, false, false, true>(r, f, b);
+    return field ? update_run<false, true, false, false>(r, f, b)
+                 : update_run<false, false, false, false>(r, f, b);
+  };
 #ifdef PYOIF_WITH_OPENMP
-#pragma omp parallel for schedule(static) num_threads(m_threads) reduction(min : first_bad)
+#pragma omp parallel for schedule(static) num_threads(m_threads)
 #endif
   for (long i = 0; i < n_runs; ++i) {
-    bool bad;
-    const Run& r = m_runs[i];
-    if (thermal)
-      bad = field ? update_run<true, true, false>(r, src, dst)
-                  : update_run<true, false, false>(r, src, dst);
-    else if (relaxed)
-      bad = field ? update_run<false, true, true>(r, src, dst)
-                  : update_run<false, false, true>(r, src, dst);
-    else
-      bad = field ? update_run<false, true, false>(r, src, dst)
-                  : update_run<false, false, false>(r, src, dst);
-    if (bad && i < first_bad)
-      first_bad = i;
-  }
-#ifdef __AVX512F__
-  _mm_sfence(); // order the streaming stores before the halo exchange reads them
+    BadNode b;
+    if (update(m_runs[i], b)) {
+#ifdef PYOIF_WITH_OPENMP
+#pragma omp critical(pyoif_lb_bad_node)
 #endif
+      if (i < first_bad) {
+        first_bad = i;
+        bad_node = b;
+      }
+    }
+  }
   if (first_bad < n_runs)
-    report_instability(m_runs[first_bad]); // src is still the pre-collision state
-  halo_exchange(dst);
-  apply_bounce_back(dst);
-  std::swap(m_f, m_next);
+    // the update is abandoned half done: the fluid state is not usable after this
+    report_instability(bad_node);
+  m_swapped = even;
+  halo_exchange(f, even);
+  apply_bounce_back(f);
   if (field) {
     for (auto& g : m_field)
       std::fill(g.begin(), g.end(), 0.0);
