@@ -165,7 +165,7 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
   }
 
   for (int q = 0; q < Q; ++q)
-    m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][0]) * m_pad[1] + c[q][1]) * m_pad[2] + c[q][2];
+    m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][2]) * m_pad[1] + c[q][1]) * m_pad[0] + c[q][0];
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
   m_stride = ((nodes + 7) / 8) * 8;
   m_f = allocate(Q * m_stride);
@@ -292,21 +292,22 @@ void LBFluid::rebuild_geometry() {
   m_runs.clear();
   m_links.clear();
   m_n_fluid = 0;
-  for (int x = 1; x <= m_n[0]; ++x)
+  // runs of fluid nodes along x, in memory order
+  for (int z = 1; z <= m_n[2]; ++z)
     for (int y = 1; y <= m_n[1]; ++y) {
-      int z = 1;
-      while (z <= m_n[2]) {
+      int x = 1;
+      while (x <= m_n[0]) {
         if (m_flag[index(x, y, z)] != 0) {
-          ++z;
+          ++x;
           continue;
         }
-        const int start = z;
-        while (z <= m_n[2] && m_flag[index(x, y, z)] == 0)
-          ++z;
-        m_runs.push_back({index(x, y, start), z - start});
-        m_n_fluid += static_cast<std::size_t>(z - start);
-        for (int zz = start; zz < z; ++zz) {
-          const std::size_t n = index(x, y, zz);
+        const int start = x;
+        while (x <= m_n[0] && m_flag[index(x, y, z)] == 0)
+          ++x;
+        m_runs.push_back({index(start, y, z), x - start});
+        m_n_fluid += static_cast<std::size_t>(x - start);
+        for (int xx = start; xx < x; ++xx) {
+          const std::size_t n = index(xx, y, z);
           for (int q = 1; q < Q; ++q) {
             const std::size_t s = n + m_offset[q];
             if (m_flag[s] == 0)

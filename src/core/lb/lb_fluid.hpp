@@ -1,7 +1,7 @@
 // Lattice-Boltzmann D3Q19 fluid on a cubic lattice with one ghost (halo) layer.
 //
 // Storage: structure of arrays, population q of padded node n at
-// f[q * stride + n], padded node index n = (x * Py + y) * Pz + z with
+// f[q * stride + n], padded node index n = (z * Py + y) * Px + x with
 // x, y, z in [0, N + 1] (0 and N + 1 are the ghost layer; the lattice node
 // (i, j, k) of the domain is padded node (i + 1, j + 1, k + 1) and sits at
 // position ((i, j, k) + 1/2) * agrid).
@@ -180,8 +180,17 @@ private:
     int q, boundary;         ///< direction fluid -> solid, boundary index
     double wall_term;        ///< 6 w_q rho0 c_q . u_wall (lattice units)
   };
+  // x innermost: fluid runs follow x, the usual flow direction of a channel,
+  // so channels whose walls are normal to y or z still have long runs
   std::size_t index(int x, int y, int z) const {
-    return (static_cast<std::size_t>(x) * m_pad[1] + y) * m_pad[2] + z;
+    return (static_cast<std::size_t>(z) * m_pad[1] + y) * m_pad[0] + x;
+  }
+  /** Padded (x, y, z) of a padded node index. */
+  Vec3i padded_coordinates(std::size_t n) const {
+    const std::size_t px = static_cast<std::size_t>(m_pad[0]),
+                      py = static_cast<std::size_t>(m_pad[1]);
+    return Vec3i(static_cast<int>(n % px), static_cast<int>((n / px) % py),
+                 static_cast<int>(n / (px * py)));
   }
   std::size_t checked_node(const Vec3i& node) const;
   void rebuild_geometry();

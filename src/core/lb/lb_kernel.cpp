@@ -294,9 +294,8 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
       // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
       // the w-weighted basis; mass and momentum untouched
-      const int z = static_cast<int>(n % m_pad[2]) - 1;
-      const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
-      const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
+      const Vec3i pc = padded_coordinates(n);
+      const int x = pc[0] - 1, y = pc[1] - 1, z = pc[2] - 1;
       const random::Key key{m_p.seed, static_cast<std::uint64_t>(random::Stream::lb_fluid), counter,
                             (static_cast<std::uint64_t>(x) * m_n[1] + y) * m_n[2] + z};
       double amp[Q];
@@ -339,7 +338,7 @@ void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
           }
         }
         const std::ptrdiff_t delta =
-            (static_cast<std::ptrdiff_t>(shift[0]) * m_pad[1] + shift[1]) * m_pad[2] + shift[2];
+            (static_cast<std::ptrdiff_t>(shift[2]) * m_pad[1] + shift[1]) * m_pad[0] + shift[0];
         for (int q = 1; q < Q; ++q) {
           bool moves_in = true;
           for (int d = 0; d < 3; ++d)
@@ -356,16 +355,16 @@ void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
             qhi[d] = o[d] == 0 ? std::min(hi[d], m_n[d] + c[q][d]) : hi[d];
           }
           double* fq = f + q * m_stride;
-          for (int x = qlo[0]; x <= qhi[0]; ++x)
+          for (int z = qlo[2]; z <= qhi[2]; ++z)
             for (int y = qlo[1]; y <= qhi[1]; ++y) {
-              const std::size_t base = index(x, y, qlo[2]);
-              const int len = qhi[2] - qlo[2] + 1;
+              const std::size_t base = index(qlo[0], y, z); // x contiguous
+              const int len = qhi[0] - qlo[0] + 1;
               if (fill_ghosts)
-                for (int z = 0; z < len; ++z)
-                  fq[base + z] = fq[base + z + delta];
+                for (int x = 0; x < len; ++x)
+                  fq[base + x] = fq[base + x + delta];
               else
-                for (int z = 0; z < len; ++z)
-                  fq[base + z + delta] = fq[base + z];
+                for (int x = 0; x < len; ++x)
+                  fq[base + x + delta] = fq[base + x];
             }
         }
       }
@@ -389,9 +388,8 @@ void LBFluid::apply_bounce_back(double* f) const {
 
 void LBFluid::report_instability(const BadNode& bad) const {
   const std::size_t n = bad.node;
-  const int z = static_cast<int>(n % m_pad[2]) - 1;
-  const int y = static_cast<int>((n / m_pad[2]) % m_pad[1]) - 1;
-  const int x = static_cast<int>(n / (static_cast<std::size_t>(m_pad[2]) * m_pad[1])) - 1;
+  const Vec3i pc = padded_coordinates(n);
+  const int x = pc[0] - 1, y = pc[1] - 1, z = pc[2] - 1;
   std::ostringstream msg;
   msg << "lattice-Boltzmann fluid unstable at node (" << x << ", " << y << ", " << z
       << ") in lattice update " << m_updates << ": density " << bad.rho
