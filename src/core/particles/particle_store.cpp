@@ -5,6 +5,7 @@ namespace pyoif {
 std::size_t ParticleStore::add(int pid, const Vec3& p, const Vec3i& img, const Vec3& v, double m,
                                int t, int mol, const Vec3& fext, std::uint8_t fix) {
   const std::size_t idx = id.size();
+  layout_version = next_layout_version();
   id.push_back(pid);
   pos.push_back(p);
   image.push_back(img);
@@ -27,6 +28,7 @@ void ParticleStore::remove(int pid) {
   if (idx < 0)
     return;
   const std::size_t last = id.size() - 1;
+  layout_version = next_layout_version();
   auto move_last = [&](auto& vec) {
     vec[idx] = vec[last];
     vec.pop_back();
@@ -49,6 +51,6 @@ void ParticleStore::remove(int pid) {
   clear_ghosts();
 }
 
-void ParticleStore::clear() { *this = ParticleStore{}; }
+void ParticleStore::clear() { *this = ParticleStore{}; } // a fresh layout_version
 
 }  // namespace pyoif

@@ -6,6 +6,7 @@
 
 #include "utils/vector.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +30,15 @@ struct ParticleStore {
 
   // --- id -> local index (-1 where none) ------------------------------------
   std::vector<int> index_of_id;
+
+  /** Changes whenever local indices may change (insertion, removal, clear),
+   *  unique over all stores of the process: caches of local indices (the OIF
+   *  fast path) compare it instead of re-looking-up ids every step. */
+  std::uint64_t layout_version = next_layout_version();
+  static std::uint64_t next_layout_version() {
+    static std::atomic<std::uint64_t> counter{0};
+    return ++counter;
+  }
 
   std::size_t n_local() const { return id.size(); }
   std::size_t n_ghost() const { return ghost_pos.size(); }

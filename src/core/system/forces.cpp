@@ -17,10 +17,20 @@ void System::prepare_step() {
 
 void System::add_bonded_forces(Energies* e) {
   auto& p = particles;
+  // The time-step loop (no energies) takes the OIF fast path; it declines
+  // (returns false, particles untouched) whenever the generic loop must speak,
+  // e.g. to name a broken bond. One rank only: its cell sums are not reduced.
+  const bool fast = e == nullptr && bonded_fast_path && comm.size() == 1;
+  if (fast && m_fast_plans.size() != bonded.size())
+    m_fast_plans.resize(bonded.size());
   for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id) {
     BondedEntry& entry = bonded[bond_id];
     std::visit(
         [&](auto& ia) {
+          using IA = std::decay_t<decltype(ia)>;
+          if constexpr (oif::has_fast_path<IA>)
+            if (fast && m_fast_plans[bond_id].run(ia, entry.bonds, p, box))
+              return;
           prepare_bonds(ia, entry.bonds, p, box, comm);
           double energy_sum = 0.0;
           for_each_bond(ia, entry.bonds, p, box, time,

@@ -7,6 +7,7 @@
 #include "constraints/shape_based_constraint.hpp"
 #include "interactions/bonded/bond_group.hpp"
 #include "interactions/bonded/bonded_registry.hpp"
+#include "interactions/bonded/oif_fast_path.hpp"
 #include "interactions/nonbonded/nonbonded_table.hpp"
 #include "lb/lb_coupling.hpp"
 #include "lb/lb_fluid.hpp"
@@ -78,6 +79,9 @@ public:
   /** Adds bonds of interaction `bond_id`: ids is n_bonds * n_particles ids,
    *  per_bond the per-bond reference values (or empty). */
   void add_bonds(int bond_id, const std::vector<int>& ids, const std::vector<double>& per_bond);
+  /** The time-step loop evaluates the OIF bond groups with the compiled fast
+   *  path (oif_fast_path.hpp); false: the generic bond loop (tests compare). */
+  bool bonded_fast_path = true;
   std::vector<std::shared_ptr<ShapeBasedConstraint>> constraints;
 
   // --- thermostats and fluid --------------------------------------------------
@@ -103,6 +107,7 @@ private:
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
   void add_langevin_forces();
+  std::vector<oif::FastBondPlan> m_fast_plans;  ///< per bonded interaction id
   double m_time_step = 0.01;
   bool m_forces_valid = false;
   int m_lb_substep = 0;

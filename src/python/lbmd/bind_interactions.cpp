@@ -101,6 +101,9 @@ void bind_interactions(py::module_& m) {
   py::class_<OifOutDirection>(m, "OifOutDirection").def(py::init<>());
 
   sys.def("add_bonded_interaction", &System::add_bonded_interaction)
+      .def_readwrite("bonded_fast_path", &System::bonded_fast_path,
+                     "The time-step loop evaluates the OIF bonds with the compiled fast path "
+                     "(default); False: the generic bond loop (for comparisons).")
       .def("n_bonded_interactions", [](const System& s) { return s.bonded.size(); })
       .def("add_bonds",
            [](System& s, int bond_id, const IdArray& ids, const RealArray& per_bond) {

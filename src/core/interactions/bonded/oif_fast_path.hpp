@@ -1,0 +1,127 @@
+// The time-step path of the OIF membrane bonds: a compiled evaluation of one
+// bond group (OifLocalForces, OifGlobalForces or OifOutDirection) that gives
+// the same forces and normals as the generic bond loop (bond_loop.hpp) up to
+// the order of floating-point operations, at a fraction of its cost.
+//
+// Derived once per set of bonds and particles (rebuilt when the particle
+// store's layout version, the bonds or, for the global forces, a cell's mol_id
+// change): the local particle index of every node the group touches (compact
+// "slots", so a step does no id -> index lookups), each bond as four slots, the
+// unique triangles of the group, and the cells. Per step:
+//  - OifLocalForces: one pass over the unique triangles for the local area
+//    (eq. 5) -- each triangle once, with the mean of its bonds' reference areas
+//    instead of 1/3 in each of its three bonds -- then one pass over the edges
+//    for stretching (eq. 3), viscosity and bending (eq. 4), with the dihedral
+//    angle's sine from (n1 x n2).e = |e|^2 n1.(d - b) (one cross product less)
+//    and no energies (the time-step loop never reads them).
+//  - OifGlobalForces: one pass over the triangles for the per-cell area and
+//    volume (eqs. 6, 7; volume as a.N/6 with N the triangle's (b-a)x(c-a) and
+//    a its first vertex relative to the cell's reference point, unfolded), one
+//    pass for the forces.
+//  - OifOutDirection: one pass over the triangles for the node normals.
+// Forces are accumulated per slot and added to the particles only when the
+// whole group succeeded: on a degenerate or broken bond (or any non-finite
+// force) run() returns false without touching the particles, and the caller
+// runs the generic loop, which throws the SimulationInstability naming the
+// bond. Energies, analysis and multi-rank runs use the generic loop.
+#pragma once
+
+#include "interactions/bonded/bond_group.hpp"
+#include "interactions/bonded/oif_global_forces.hpp"
+#include "interactions/bonded/oif_local_forces.hpp"
+#include "interactions/bonded/oif_out_direction.hpp"
+#include "particles/particle_store.hpp"
+#include "system/box_geometry.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+namespace pyoif::oif {
+
+template <class IA>
+constexpr bool has_fast_path =
+    std::is_same_v<IA, OifLocalForces> || std::is_same_v<IA, OifGlobalForces> ||
+    std::is_same_v<IA, OifOutDirection>;
+
+class FastBondPlan {
+public:
+  /** Adds the group's forces (writes the node normals for OifOutDirection).
+   *  Returns false, with the particles untouched, when the fast path cannot
+   *  evaluate the group (missing particle, bad reference value, degenerate or
+   *  broken bond, non-finite force): the caller then runs the generic loop. */
+  bool run(const OifLocalForces& ia, const BondGroup& group, ParticleStore& p,
+           const BoxGeometry& box);
+  bool run(const OifGlobalForces& ia, const BondGroup& group, ParticleStore& p,
+           const BoxGeometry& box);
+  bool run(const OifOutDirection& ia, const BondGroup& group, ParticleStore& p,
+           const BoxGeometry& box);
+
+  /** Number of (re)builds so far (tests: the plan is reused across steps). */
+  std::size_t n_builds() const { return m_n_builds; }
+
+private:
+  /** One OifLocalForces bond (B, A, C, D) as slots, with its references:
+   *  relaxed length and the relaxed dihedral as psi0 = pi - phi0. */
+  struct EdgeBond {
+    int b, a, c, d;
+    double r0, inv_r0, cos_psi0, sin_psi0;
+  };
+  /** One triangle as slots. For OifLocalForces: weight = (bonds using it) / 3
+   *  and area0 = the sum of those bonds' reference areas / 3, so that
+   *  kal (weight S - area0) is the sum of the bonds' kal (S - S0_bond) / 3. For
+   *  the triangle groups: cell slot and the sign that makes its normal point
+   *  out of the cell (OifOutDirection). */
+  struct Triangle {
+    int v0, v1, v2;
+    int cell;
+    double weight, area0;
+  };
+
+  struct Key {
+    std::uint64_t particles_version = 0;
+    const void* ids = nullptr;
+    const void* per_bond = nullptr;
+    std::size_t n_ids = 0, n_per_bond = 0;
+    int kind = -1;
+    bool operator==(const Key& o) const {
+      return particles_version == o.particles_version && ids == o.ids && per_bond == o.per_bond &&
+             n_ids == o.n_ids && n_per_bond == o.n_per_bond && kind == o.kind;
+    }
+  };
+  Key key_of(const BondGroup& group, const ParticleStore& p, int kind) const;
+
+  /** Slots of the group's particles; false when a particle is missing. */
+  bool build_slots(const BondGroup& group, const ParticleStore& p, std::vector<int>& bond_slots);
+  bool build_local(const BondGroup& group, const ParticleStore& p);
+  bool build_triangles(const BondGroup& group, const ParticleStore& p);
+  bool cells_unchanged(const ParticleStore& p) const;
+  void gather_positions(const ParticleStore& p);
+  /** Adds the slot forces to the particles if all are finite. */
+  bool commit_forces(ParticleStore& p) const;
+
+  Key m_key;
+  bool m_usable = false; ///< false: the group cannot use the fast path (generic loop)
+  std::size_t m_n_builds = 0;
+
+  std::vector<int> m_index; ///< slot -> local particle index
+  std::vector<Vec3> m_x;    ///< slot -> folded position of this step
+  std::vector<Vec3> m_v;    ///< slot -> velocity (membrane viscosity only)
+  std::vector<Vec3> m_f;    ///< slot -> force (or normal) accumulated this step
+  std::vector<EdgeBond> m_bonds;
+  std::vector<Triangle> m_triangles;
+
+  // cells of a triangle group (OifGlobalForces, OifOutDirection)
+  std::vector<int> m_cell_mol;       ///< cell -> mol_id
+  std::vector<int> m_cell_reference; ///< cell -> slot of its reference node
+  std::vector<int> m_triangle_mol;   ///< triangle -> mol_id of its first node at build
+  std::vector<double> m_cell_area, m_cell_volume;
+  std::vector<double> m_cell_volume_factor; ///< eq. 7 force per unit N of this step
+  std::vector<Vec3> m_cell_origin;          ///< unfolded reference point of this step
+  std::vector<Vec3> m_tri_normal;           ///< (b - a) x (c - a) of this step
+  std::vector<double> m_tri_area;           ///< area of this step
+  std::vector<double> m_outward_sign;       ///< OifOutDirection: +1/-1 per triangle
+};
+
+} // namespace pyoif::oif
