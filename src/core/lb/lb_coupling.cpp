@@ -20,7 +20,7 @@ struct Stencil {
 Stencil stencil(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
   const Vec3 p = box.folded(pos) / fluid.agrid() - Vec3::Constant(0.5);
   const Vec3i& n = fluid.grid();
-  int node[3][2];  // the two node indices per axis, folded into [0, N)
+  int node[3][2]; // the two node indices per axis, folded into [0, N)
   double frac[3];
   for (int d = 0; d < 3; ++d) {
     const double fl = std::floor(p[d]);
@@ -59,6 +59,18 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                       const CouplingParams& params, std::uint64_t step, double time_step) {
   if (params.gamma <= 0.0)
     return;
+  const auto field = fluid.impulse_field();
+  const double scale = fluid.impulse_scale();
+  auto deposit = [&](const Stencil& s, const Vec3& impulse) {
+    const Vec3 p = scale * impulse;
+    for (int m = 0; m < 8; ++m) {
+      const std::size_t node = s.node[m];
+      const double wgt = s.weight[m];
+      field[0][node] += wgt * p[0];
+      field[1][node] += wgt * p[1];
+      field[2][node] += wgt * p[2];
+    }
+  };
   // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
   // repeated computation for the same step deposits F dt / 2 after taking
   // back the in-flight half of the previous computation of this step
@@ -66,12 +78,15 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
   if (same_step)
-    for (const auto& [node, impulse] : ledger.last)
-      fluid.add_impulse(node, -0.5 * impulse);
+    for (std::size_t i = 0; i < ledger.last_position.size(); ++i)
+      deposit(stencil(fluid, box, ledger.last_position[i]), -0.5 * ledger.last_impulse[i]);
   ledger.any = true;
   ledger.step = step;
-  ledger.last.clear();
-  ledger.in_flight.setZero();
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  ledger.last_position.resize(n);
+  ledger.last_impulse.resize(n);
+  Vec3 impulse_sum = Vec3::Zero();
   // fresh velocity cache for this pass (the fluid may have changed since the last)
   if (ledger.velocity_stamp.size() != fluid.n_padded_slots()) {
     ledger.velocity_stamp.assign(fluid.n_padded_slots(), 0);
@@ -82,22 +97,23 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     std::fill(ledger.velocity_stamp.begin(), ledger.velocity_stamp.end(), 0);
     ledger.stamp = 1;
   }
-  auto node_velocity = [&](std::size_t node) -> const Vec3& {
-    if (ledger.velocity_stamp[node] != ledger.stamp) {
-      ledger.velocity_cache[node] = fluid.velocity_at_index(node);
-      ledger.velocity_stamp[node] = ledger.stamp;
-    }
-    return ledger.velocity_cache[node];
-  };
+  std::uint32_t* const stamps = ledger.velocity_stamp.data();
+  Vec3* const cache = ledger.velocity_cache.data();
+  const std::uint32_t stamp = ledger.stamp;
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
-  auto& p = particles;
-  for (std::size_t i = 0; i < p.n_local(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const Stencil s = stencil(fluid, box, p.pos[i]);
     Vec3 u = Vec3::Zero();
-    for (int m = 0; m < 8; ++m)
-      u += s.weight[m] * node_velocity(s.node[m]);
+    for (int m = 0; m < 8; ++m) {
+      const std::size_t node = s.node[m];
+      if (stamps[node] != stamp) {
+        cache[node] = fluid.velocity_at_index(node);
+        stamps[node] = stamp;
+      }
+      u += s.weight[m] * cache[node];
+    }
     Vec3 f = params.gamma * (u - p.vel[i]);
     if (noise > 0.0) {
       key.key = static_cast<std::uint64_t>(p.id[i]);
@@ -106,13 +122,13 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     }
     p.force[i] += f;
     // the fluid gets -F time_step of momentum per MD step, applied at its next update
-    for (int m = 0; m < 8; ++m) {
-      const Vec3 impulse = -s.weight[m] * time_step * f;
-      fluid.add_impulse(s.node[m], fraction * impulse);
-      ledger.last.emplace_back(s.node[m], impulse);
-      ledger.in_flight += 0.5 * impulse;
-    }
+    const Vec3 impulse = -time_step * f;
+    deposit(s, fraction * impulse);
+    ledger.last_position[i] = p.pos[i];
+    ledger.last_impulse[i] = impulse;
+    impulse_sum += impulse;
   }
+  ledger.in_flight = 0.5 * impulse_sum;
 }
 
 } // namespace pyoif::lb

@@ -143,6 +143,14 @@ public:
   Vec3 velocity_at_index(std::size_t n) const;
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
+  /** The force field the next update applies, for bulk deposits: component d
+   *  of the field at padded index n is impulse_field()[d][n]; an impulse p
+   *  (MD units) adds p * impulse_scale(). Allocates the field on first use. */
+  std::array<double*, 3> impulse_field();
+  double impulse_scale() const {
+    const double a2 = m_p.agrid * m_p.agrid;
+    return m_p.tau / (a2 * a2); // momentum-density change per update, lattice units
+  }
 
   /** Bookkeeping of the particle coupling under velocity Verlet: an MD step's
    *  coupling force F_n acts on the particles in two half kicks (dt/2 at the
@@ -155,8 +163,10 @@ public:
   struct CouplingLedger {
     bool any = false;
     std::uint64_t step = 0;
-    std::vector<std::pair<std::size_t, Vec3>> last; ///< node, full impulse of the last call
-    Vec3 in_flight = Vec3::Zero();                  ///< impulse deposited, not yet on particles
+    /// where and how much the last call deposited (full impulse per particle,
+    /// spread with the stencil of that position)
+    std::vector<Vec3> last_position, last_impulse;
+    Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
     /// Node velocities computed in the current coupling pass: each lattice
     /// node serves several membrane nodes, and its 19 populations lie in 19
     /// different streams, so computing it once per pass saves most misses.
@@ -202,6 +212,10 @@ private:
   };
   /** Offset into m_f of the pre-collision population q of padded node n
    *  (fluid node, or a domain node of any kind in the normal state). */
+  /** read_offset()[q] + n: where population_slot(q, n) is, for the current layout. */
+  const std::ptrdiff_t* read_offset() const {
+    return m_swapped ? m_read_swapped.data() : m_read_normal.data();
+  }
   std::size_t population_slot(int q, std::size_t n) const {
     return m_swapped ? static_cast<std::size_t>(d3q19::opposite(q)) * m_stride + n - m_offset[q]
                      : static_cast<std::size_t>(q) * m_stride + n;
@@ -212,7 +226,7 @@ private:
    *  else fold the ghost layer into the domain (after an odd update). */
   void halo_exchange(double* f, bool fill_ghosts) const;
   template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
-  bool update_run(const Run& r, double* f, BadNode& bad) const;
+  bool update_run(const Run& r, double* f, BadNode& bad);
   [[noreturn]] void report_instability(const BadNode& bad) const;
   void moments(std::size_t n, double& rho, Vec3& j) const;
 
@@ -231,6 +245,7 @@ private:
   std::vector<Link> m_links;
   std::size_t m_n_fluid = 0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
+  std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};
   Vec3 m_ext_lattice = Vec3::Zero();
   double m_kT_lattice = 0.0;
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m

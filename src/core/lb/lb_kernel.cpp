@@ -177,7 +177,7 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
 } // namespace
 
 template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
-bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
+bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   // AA pattern (see lb_fluid.hpp): population q of node n is read at
   // f[read[q] + n] and its post-collision value written to f[write[q] + n];
   // within one update each node reads and writes the same 19 places
@@ -192,9 +192,11 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
   }
   const Relaxation l = m_relax;
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
-  const double* __restrict gx = with_field ? m_field[0].data() : nullptr;
-  const double* __restrict gy = with_field ? m_field[1].data() : nullptr;
-  const double* __restrict gz = with_field ? m_field[2].data() : nullptr;
+  // the coupling's force field is read once and cleared in the same pass
+  // (solid nodes keep theirs, which nothing reads; rebuild_geometry clears all)
+  double* __restrict gx = with_field ? m_field[0].data() : nullptr;
+  double* __restrict gy = with_field ? m_field[1].data() : nullptr;
+  double* __restrict gz = with_field ? m_field[2].data() : nullptr;
   const std::size_t begin = r.start, end = r.start + r.length;
   // a node out of range: its moments, recomputed from the populations that
   // are still unwritten (the caller throws, the update is abandoned)
@@ -238,6 +240,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
           force[0][i] += gx[b0 + i];
           force[1][i] += gy[b0 + i];
           force[2][i] += gz[b0 + i];
+          gx[b0 + i] = gy[b0 + i] = gz[b0 + i] = 0.0;
         }
       }
       const double* in[Q];
@@ -287,6 +290,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) const {
         F[0] += gx[n];
         F[1] += gy[n];
         F[2] += gz[n];
+        gx[n] = gy[n] = gz[n] = 0.0;
       }
       const NodeResult res = collide<false>(fn, F, l, out);
       if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
@@ -452,11 +456,7 @@ void LBFluid::step() {
   m_swapped = even;
   halo_exchange(f, even);
   apply_bounce_back(f);
-  if (field) {
-    for (auto& g : m_field)
-      std::fill(g.begin(), g.end(), 0.0);
-    m_field_used = false;
-  }
+  m_field_used = false; // the kernel cleared the field of every fluid node
   ++m_updates;
 }
 
