@@ -4,8 +4,19 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_map>
+
+// The per-cell arrays of the triangle passes are disjoint slices of one
+// buffer: tell the compiler their iterations are independent (vectorise).
+#if defined(__clang__)
+#define PYOIF_INDEPENDENT_ITERATIONS _Pragma("clang loop vectorize(assume_safety)")
+#elif defined(__GNUC__)
+#define PYOIF_INDEPENDENT_ITERATIONS _Pragma("GCC ivdep")
+#else
+#define PYOIF_INDEPENDENT_ITERATIONS
+#endif
 
 namespace pyoif::oif {
 
@@ -26,29 +37,42 @@ inline void add_centroid_allocated_edges(const Vec3& e1, const Vec3& e2, double 
   fc += scale * mc;
 }
 
-/** atan2(y, x) in (-pi, pi] for the deviation of a dihedral angle from its
- *  reference, given as (sin, cos) times a positive factor. Deviations below
- *  atan(1/4) (14 degrees, most of a membrane's angles) take an odd polynomial
- *  t P(t^2), t = y/x, P the Chebyshev economisation on [0, 1/16] of the Taylor
- *  series of atan(sqrt s)/sqrt s (maintainer-free derivation: exact rational
- *  arithmetic, dropped terms < 5e-18; max relative error 2.2e-16 against libm
- *  on 2e5 random points); larger ones call std::atan2. Result in [-pi, pi]. */
-inline double angle_from_reference(double y, double x) {
-  if (x > 0.0 && std::abs(y) <= 0.25 * x) {
-    const double t = y / x, s = t * t;
-    double pz = 0.04599761088928747;
-    pz = pz * s - 0.06523656687585018;
-    pz = pz * s + 0.07683492919828101;
-    pz = pz * s - 0.09090589248444612;
-    pz = pz * s + 0.11111104259672454;
-    pz = pz * s - 0.1428571420303533;
-    pz = pz * s + 0.19999999999499324;
-    pz = pz * s - 0.33333333333332166;
-    pz = pz * s + 1.0;
-    return t * pz;
-  }
-  return std::atan2(y, x);
+/** atan(t) for |t| <= 1/4 (dihedral deviations below 14 degrees, most of a
+ *  membrane's): t P(t^2), P the Chebyshev economisation on [0, 1/16] of the
+ *  Taylor series of atan(sqrt s)/sqrt s, derived in exact rational arithmetic
+ *  (dropped terms < 5e-18; largest relative error against libm's atan on 2e5
+ *  random points 2.2e-16). Branch-free, so a block of bonds vectorises. */
+inline double atan_small(double t) {
+  const double s = t * t;
+  double pz = 0.04599761088928747;
+  pz = pz * s - 0.06523656687585018;
+  pz = pz * s + 0.07683492919828101;
+  pz = pz * s - 0.09090589248444612;
+  pz = pz * s + 0.11111104259672454;
+  pz = pz * s - 0.1428571420303533;
+  pz = pz * s + 0.19999999999499324;
+  pz = pz * s - 0.33333333333332166;
+  pz = pz * s + 1.0;
+  return t * pz;
 }
+
+constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
+
+/** Per-block arrays of the edge pass (structure of arrays). */
+struct EdgeBlock {
+  double e[3][kBlock], u[3][kBlock], w[3][kBlock], dv[3][kBlock];
+  double r0[kBlock], inv_r0[kBlock], cos_psi0[kBlock], sin_psi0[kBlock];
+  double l[kBlock], inv_l2[kBlock], coefficient[kBlock];
+  double n1[3][kBlock], n2[3][kBlock], n1_2[kBlock], n2_2[kBlock];
+  double sine[kBlock], cosine[kBlock], dphi[kBlock];
+  double fa[3][kBlock], fb[3][kBlock], fc[3][kBlock], fd[3][kBlock];
+};
+
+/** Per-block arrays of the local-area pass. */
+struct TriangleBlock {
+  double e1[3][kBlock], e2[3][kBlock], weight[kBlock], area0[kBlock];
+  double f0[3][kBlock], f1[3][kBlock], f2[3][kBlock];
+};
 
 } // namespace
 
@@ -155,15 +179,24 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
       m_cell_reference.push_back(s[0]);
     }
     m_triangles[t] = {s[0], s[1], s[2], it->second, 1.0, 0.0};
-    m_triangle_mol[t] = mol;
   }
   const std::size_t n_cells = m_cell_mol.size();
-  m_cell_area.resize(n_cells);
-  m_cell_volume.resize(n_cells);
-  m_cell_volume_factor.resize(n_cells);
+  // triangles grouped by cell (a cell's are contiguous when created in bulk;
+  // the stable sort keeps their order): per-cell passes over a range
+  std::stable_sort(m_triangles.begin(), m_triangles.end(),
+                   [](const Triangle& a, const Triangle& b) { return a.cell < b.cell; });
+  m_cell_begin.assign(n_cells + 1, 0);
+  for (std::size_t t = 0; t < n; ++t) {
+    m_triangle_mol[t] = m_cell_mol[m_triangles[t].cell];
+    ++m_cell_begin[m_triangles[t].cell + 1];
+  }
+  std::size_t largest = 0;
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    largest = std::max<std::size_t>(largest, m_cell_begin[c + 1]);
+    m_cell_begin[c + 1] += m_cell_begin[c];
+  }
+  m_scratch.resize(kCellArrays * largest);
   m_cell_origin.resize(n_cells);
-  m_tri_normal.resize(n);
-  m_tri_area.resize(n);
   return true;
 }
 
@@ -210,70 +243,201 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
   for (Vec3& f : m_f)
     f.setZero();
 
+  // Both passes work in blocks of bonds/triangles: gather the minimum-image
+  // edge vectors (indexed loads), then the arithmetic over plain arrays (short
+  // independent loops the compiler vectorises; the per-bond chain of square
+  // roots, divisions and the arctangent is long, so one bond at a time leaves
+  // the core waiting), then scatter the forces to the slots.
+
   // local area (eq. 5), once per triangle
   if (ia.kal != 0.0) {
     const double kal = ia.kal;
-    for (const Triangle& t : m_triangles) {
-      const Vec3& x0 = m_x[t.v0];
-      const Vec3 e1 = box.minimum_image(m_x[t.v1], x0);
-      const Vec3 e2 = box.minimum_image(m_x[t.v2], x0);
-      const double area = 0.5 * e1.cross(e2).norm();
-      if (!(area > 0.0))
+    TriangleBlock blk;
+    for (std::size_t first = 0; first < m_triangles.size(); first += kBlock) {
+      const int nb = static_cast<int>(std::min<std::size_t>(kBlock, m_triangles.size() - first));
+      const Triangle* tri = m_triangles.data() + first;
+      for (int k = 0; k < nb; ++k) {
+        const Vec3& x0 = m_x[tri[k].v0];
+        const Vec3 e1 = box.minimum_image(m_x[tri[k].v1], x0);
+        const Vec3 e2 = box.minimum_image(m_x[tri[k].v2], x0);
+        for (int d = 0; d < 3; ++d) {
+          blk.e1[d][k] = e1[d];
+          blk.e2[d][k] = e2[d];
+        }
+        blk.weight[k] = tri[k].weight;
+        blk.area0[k] = tri[k].area0;
+      }
+      int bad = 0;
+      for (int k = 0; k < nb; ++k) {
+        const double ax = blk.e1[0][k], ay = blk.e1[1][k], az = blk.e1[2][k];
+        const double bx = blk.e2[0][k], by = blk.e2[1][k], bz = blk.e2[2][k];
+        const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+        const double area = 0.5 * std::sqrt(nx * nx + ny * ny + nz * nz);
+        bad |= !(area > 0.0);
+        // centroid allocation (add_centroid_allocated_edges)
+        const double max_ = (ax + bx) / 3.0, may = (ay + by) / 3.0, maz = (az + bz) / 3.0;
+        const double mbx = max_ - ax, mby = may - ay, mbz = maz - az;
+        const double mcx = max_ - bx, mcy = may - by, mcz = maz - bz;
+        const double scale = kal * (blk.weight[k] * area - blk.area0[k]) /
+                             (max_ * max_ + may * may + maz * maz + mbx * mbx + mby * mby +
+                              mbz * mbz + mcx * mcx + mcy * mcy + mcz * mcz);
+        blk.f0[0][k] = scale * max_;
+        blk.f0[1][k] = scale * may;
+        blk.f0[2][k] = scale * maz;
+        blk.f1[0][k] = scale * mbx;
+        blk.f1[1][k] = scale * mby;
+        blk.f1[2][k] = scale * mbz;
+        blk.f2[0][k] = scale * mcx;
+        blk.f2[1][k] = scale * mcy;
+        blk.f2[2][k] = scale * mcz;
+      }
+      if (bad)
         return false;
-      add_centroid_allocated_edges(e1, e2, kal * (t.weight * area - t.area0), m_f[t.v0], m_f[t.v1],
-                                   m_f[t.v2]);
+      for (int k = 0; k < nb; ++k) {
+        m_f[tri[k].v0] += Vec3(blk.f0[0][k], blk.f0[1][k], blk.f0[2][k]);
+        m_f[tri[k].v1] += Vec3(blk.f1[0][k], blk.f1[1][k], blk.f1[2][k]);
+        m_f[tri[k].v2] += Vec3(blk.f2[0][k], blk.f2[1][k], blk.f2[2][k]);
+      }
     }
   }
 
   // edges: stretching (eq. 3), viscosity, bending (eq. 4)
   const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
   const bool edge_terms = ks != 0.0 || kslin != 0.0 || kvisc != 0.0;
-  for (const EdgeBond& bd : m_bonds) {
-    const Vec3& xb = m_x[bd.b];
-    const Vec3 e = box.minimum_image(m_x[bd.c], xb); // c - b, the shared edge
-    const double l2 = e.squaredNorm();
-    if (!(l2 > 0.0))
+  EdgeBlock blk;
+  for (std::size_t first = 0; first < m_bonds.size(); first += kBlock) {
+    const int nb = static_cast<int>(std::min<std::size_t>(kBlock, m_bonds.size() - first));
+    const EdgeBond* bond = m_bonds.data() + first;
+    for (int k = 0; k < nb; ++k) {
+      const EdgeBond& bd = bond[k];
+      const Vec3& xb = m_x[bd.b];
+      const Vec3 e = box.minimum_image(m_x[bd.c], xb); // c - b, the shared edge
+      for (int d = 0; d < 3; ++d)
+        blk.e[d][k] = e[d];
+      if (kb != 0.0) {
+        const Vec3 u = box.minimum_image(m_x[bd.a], xb); // a - b
+        const Vec3 w = box.minimum_image(m_x[bd.d], xb); // d - b
+        for (int d = 0; d < 3; ++d) {
+          blk.u[d][k] = u[d];
+          blk.w[d][k] = w[d];
+        }
+      }
+      if (kvisc != 0.0) {
+        const Vec3 dv = m_v[bd.c] - m_v[bd.b];
+        for (int d = 0; d < 3; ++d)
+          blk.dv[d][k] = dv[d];
+      }
+      blk.r0[k] = bd.r0;
+      blk.inv_r0[k] = bd.inv_r0;
+      blk.cos_psi0[k] = bd.cos_psi0;
+      blk.sin_psi0[k] = bd.sin_psi0;
+    }
+    int bad = 0;
+    for (int k = 0; k < nb; ++k) {
+      const double l2 =
+          blk.e[0][k] * blk.e[0][k] + blk.e[1][k] * blk.e[1][k] + blk.e[2][k] * blk.e[2][k];
+      bad |= !(l2 > 0.0);
+      blk.l[k] = std::sqrt(l2);
+      blk.inv_l2[k] = 1.0 / l2;
+    }
+    if (bad)
       return false;
-    const double l = std::sqrt(l2), inv_l2 = 1.0 / l2;
+    // force on b along e (c gets the opposite): eq. 3 and the viscosity
+    for (int k = 0; k < nb; ++k)
+      blk.coefficient[k] = 0.0;
     if (edge_terms) {
-      // force on b along e (c gets the opposite): eq. 3 and the viscosity
-      const double stretch = (l - bd.r0) * l * inv_l2; // (l - l0) / l
-      double coefficient = 0.0;
       if (ks != 0.0)
-        coefficient += ks * neo_hookean_kappa(l * bd.inv_r0) * stretch;
+        for (int k = 0; k < nb; ++k) {
+          const double l = blk.l[k];
+          blk.coefficient[k] += ks * neo_hookean_kappa(l * blk.inv_r0[k]) * (l - blk.r0[k]) * l *
+                                blk.inv_l2[k]; // (l - l0) / l
+        }
       if (kslin != 0.0)
-        coefficient += kslin * stretch;
+        for (int k = 0; k < nb; ++k)
+          blk.coefficient[k] += kslin * (blk.l[k] - blk.r0[k]) * blk.l[k] * blk.inv_l2[k];
       if (kvisc != 0.0)
-        coefficient += kvisc * (m_v[bd.c] - m_v[bd.b]).dot(e) * inv_l2;
-      const Vec3 fe = coefficient * e;
-      m_f[bd.b] += fe;
-      m_f[bd.c] -= fe;
+        for (int k = 0; k < nb; ++k)
+          blk.coefficient[k] += kvisc *
+                                (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] +
+                                 blk.dv[2][k] * blk.e[2][k]) *
+                                blk.inv_l2[k];
+      if (kb == 0.0) // else added with the bending forces (one scatter)
+        for (int k = 0; k < nb; ++k) {
+          const Vec3 fe = blk.coefficient[k] * Vec3(blk.e[0][k], blk.e[1][k], blk.e[2][k]);
+          m_f[bond[k].b] += fe;
+          m_f[bond[k].c] -= fe;
+        }
     }
     if (kb != 0.0) {
-      // the dihedral angle and its gradient of oif_bending.hpp
-      const Vec3 u = box.minimum_image(m_x[bd.a], xb); // a - b
-      const Vec3 w = box.minimum_image(m_x[bd.d], xb); // d - b
-      const Vec3 n1 = u.cross(e), n2 = e.cross(w);
-      const double n1_2 = n1.squaredNorm(), n2_2 = n2.squaredNorm();
-      if (!(n1_2 > 0.0) || !(n2_2 > 0.0))
+      // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
+      // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
+      // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
+      int slow = 0;
+      for (int k = 0; k < nb; ++k) {
+        const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
+        const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
+        const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
+        const double n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
+        const double n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
+        const double n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
+        const double n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
+        bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0);
+        const double y = blk.l[k] * (n1x * wx + n1y * wy + n1z * wz);
+        const double x = n1x * n2x + n1y * n2y + n1z * n2z;
+        const double c0 = blk.cos_psi0[k], s0 = blk.sin_psi0[k];
+        const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
+        const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+        slow |= !small;
+        const double t = small ? sine / cosine : 0.0;
+        blk.dphi[k] = -atan_small(t);
+        blk.sine[k] = sine;
+        blk.cosine[k] = cosine;
+        for (int d = 0; d < 3; ++d) {
+          blk.n1[d][k] = d == 0 ? n1x : d == 1 ? n1y : n1z;
+          blk.n2[d][k] = d == 0 ? n2x : d == 1 ? n2y : n2z;
+        }
+        blk.n1_2[k] = n1_2;
+        blk.n2_2[k] = n2_2;
+      }
+      if (bad)
         return false;
-      // psi = atan2((n1 x n2).e / l, n1.n2), and (n1 x n2).e / l = l n1.w;
-      // phi - phi0 = -(psi - psi0) with psi0 = pi - phi0, taken as one angle
-      const double y = l * n1.dot(w), x = n1.dot(n2);
-      double dphi = -angle_from_reference(y * bd.cos_psi0 - x * bd.sin_psi0,
-                                          x * bd.cos_psi0 + y * bd.sin_psi0);
-      if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
-        dphi += 2.0 * M_PI;
+      if (slow) // deviations beyond atan(1/4): the library's arctangent
+        for (int k = 0; k < nb; ++k) {
+          const double sine = blk.sine[k], cosine = blk.cosine[k];
+          if (cosine > 0.0 && std::abs(sine) <= 0.25 * cosine)
+            continue;
+          double dphi = -std::atan2(sine, cosine);
+          if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
+            dphi += 2.0 * M_PI;
+          blk.dphi[k] = dphi;
+        }
       // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
       // split by the wings' foot points ta, td (oif_bending.hpp)
-      const double c = kb * dphi * l / (n1_2 * n2_2);
-      const Vec3 fa = (c * n2_2) * n1;
-      const Vec3 fd = (c * n1_2) * n2;
-      const double ta = u.dot(e) * inv_l2, td = w.dot(e) * inv_l2;
-      m_f[bd.a] += fa;
-      m_f[bd.d] += fd;
-      m_f[bd.b] -= (1.0 - ta) * fa + (1.0 - td) * fd;
-      m_f[bd.c] -= ta * fa + td * fd;
+      for (int k = 0; k < nb; ++k) {
+        const double c = kb * blk.dphi[k] * blk.l[k] / (blk.n1_2[k] * blk.n2_2[k]);
+        const double ca = c * blk.n2_2[k], cd = c * blk.n1_2[k];
+        const double ta =
+            (blk.u[0][k] * blk.e[0][k] + blk.u[1][k] * blk.e[1][k] + blk.u[2][k] * blk.e[2][k]) *
+            blk.inv_l2[k];
+        const double td =
+            (blk.w[0][k] * blk.e[0][k] + blk.w[1][k] * blk.e[1][k] + blk.w[2][k] * blk.e[2][k]) *
+            blk.inv_l2[k];
+        for (int d = 0; d < 3; ++d) {
+          const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
+          blk.fa[d][k] = fa;
+          blk.fd[d][k] = fd;
+          const double fe = blk.coefficient[k] * blk.e[d][k];
+          blk.fb[d][k] = fe - ((1.0 - ta) * fa + (1.0 - td) * fd);
+          blk.fc[d][k] = -fe - (ta * fa + td * fd);
+        }
+      }
+      for (int k = 0; k < nb; ++k) {
+        const EdgeBond& bd = bond[k];
+        m_f[bd.a] += Vec3(blk.fa[0][k], blk.fa[1][k], blk.fa[2][k]);
+        m_f[bd.d] += Vec3(blk.fd[0][k], blk.fd[1][k], blk.fd[2][k]);
+        m_f[bd.b] += Vec3(blk.fb[0][k], blk.fb[1][k], blk.fb[2][k]);
+        m_f[bd.c] += Vec3(blk.fc[0][k], blk.fc[1][k], blk.fc[2][k]);
+      }
     }
   }
   return commit_forces(p);
@@ -293,52 +457,92 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
   if (!m_usable)
     return false;
   gather_positions(p);
-  const std::size_t n_cells = m_cell_mol.size();
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    const int i = m_index[m_cell_reference[c]];
-    m_cell_origin[c] = box.unfolded(p.pos[i], p.image[i]);
-    m_cell_area[c] = 0.0;
-    m_cell_volume[c] = 0.0;
-  }
-  // per-cell surface and volume (oif_cell_sums.hpp): with a the first vertex
-  // relative to the cell's reference point (unfolded) and N = (b-a) x (c-a),
-  // a . (b x c) = a . N
-  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    const Triangle& tr = m_triangles[t];
-    const Vec3& x0 = m_x[tr.v0];
-    const Vec3 n = box.minimum_image(m_x[tr.v1], x0).cross(box.minimum_image(m_x[tr.v2], x0));
-    const double area = 0.5 * n.norm();
-    const Vec3 a = box.unfolded(x0, p.image[m_index[tr.v0]]) - m_cell_origin[tr.cell];
-    m_cell_area[tr.cell] += area;
-    m_cell_volume[tr.cell] += a.dot(n) / 6.0;
-    m_tri_normal[t] = n;
-    m_tri_area[t] = area;
-  }
   for (Vec3& f : m_f)
     f.setZero();
   const double ka_g = ia.ka_g, kv = ia.kv, A0_g = ia.A0_g, V0 = ia.V0;
-  // volume (eq. 7, oif_volume.hpp): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    const double v = m_cell_volume[c];
-    const double s = v < 0.0 ? -1.0 : 1.0;
-    m_cell_volume_factor[c] = kv != 0.0 ? -kv * ((s * v - V0) / V0) * s / 6.0 : 0.0;
-  }
-  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    const Triangle& tr = m_triangles[t];
-    const double area = m_tri_area[t], cell_area = m_cell_area[tr.cell];
-    if (!(area > 0.0) || !(cell_area > 0.0))
-      return false;
-    if (ka_g != 0.0) {
-      const Vec3& x0 = m_x[tr.v0];
-      add_centroid_allocated_edges(
-          box.minimum_image(m_x[tr.v1], x0), box.minimum_image(m_x[tr.v2], x0),
-          global_area_coefficient(area, cell_area, A0_g, ka_g), m_f[tr.v0], m_f[tr.v1], m_f[tr.v2]);
+  // Cell by cell: its triangles' edges and first vertices gathered, then
+  // normals, areas and volumes over plain arrays (vectorised), the cell's sums,
+  // then the forces of eqs. 6 and 7 (vectorised), then scattered.
+  for (std::size_t cell = 0; cell < m_cell_mol.size(); ++cell) {
+    const std::size_t begin = m_cell_begin[cell];
+    const int n = static_cast<int>(m_cell_begin[cell + 1] - begin);
+    const Triangle* tri = m_triangles.data() + begin;
+    double* const sc = m_scratch.data();
+    const std::size_t stride = m_scratch.size() / kCellArrays;
+    auto arr = [&](int which) { return sc + which * stride; };
+    double *e1x = arr(0), *e1y = arr(1), *e1z = arr(2), *e2x = arr(3), *e2y = arr(4), *e2z = arr(5),
+           *nx = arr(6), *ny = arr(7), *nz = arr(8), *area = arr(9), *vol = arr(10), *ax = arr(11),
+           *ay = arr(12), *az = arr(13);
+    double *f0x = arr(14), *f0y = arr(15), *f0z = arr(16), *f1x = arr(17), *f1y = arr(18),
+           *f1z = arr(19), *f2x = arr(20), *f2y = arr(21), *f2z = arr(22);
+    const int ref = m_index[m_cell_reference[cell]];
+    const Vec3 origin = box.unfolded(p.pos[ref], p.image[ref]);
+    for (int k = 0; k < n; ++k) {
+      const Vec3& x0 = m_x[tri[k].v0];
+      const Vec3 e1 = box.minimum_image(m_x[tri[k].v1], x0);
+      const Vec3 e2 = box.minimum_image(m_x[tri[k].v2], x0);
+      // first vertex relative to the cell's reference point, unfolded
+      // (oif_cell_sums.hpp): a . (b x c) = a . N with N = (b - a) x (c - a)
+      const Vec3 a = box.unfolded(x0, p.image[m_index[tri[k].v0]]) - origin;
+      e1x[k] = e1[0], e1y[k] = e1[1], e1z[k] = e1[2];
+      e2x[k] = e2[0], e2y[k] = e2[1], e2z[k] = e2[2];
+      ax[k] = a[0], ay[k] = a[1], az[k] = a[2];
     }
-    if (kv != 0.0) {
-      const Vec3 fv = m_cell_volume_factor[tr.cell] * m_tri_normal[t];
-      m_f[tr.v0] += fv;
-      m_f[tr.v1] += fv;
-      m_f[tr.v2] += fv;
+    PYOIF_INDEPENDENT_ITERATIONS
+    for (int k = 0; k < n; ++k) {
+      const double x = e1y[k] * e2z[k] - e1z[k] * e2y[k];
+      const double y = e1z[k] * e2x[k] - e1x[k] * e2z[k];
+      const double z = e1x[k] * e2y[k] - e1y[k] * e2x[k];
+      nx[k] = x, ny[k] = y, nz[k] = z;
+      area[k] = 0.5 * std::sqrt(x * x + y * y + z * z);
+      vol[k] = ax[k] * x + ay[k] * y + az[k] * z;
+    }
+    // four partial sums: no loop-carried chain of additions
+    double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
+    int k = 0;
+    for (; k + 4 <= n; k += 4)
+      for (int j = 0; j < 4; ++j) {
+        sa[j] += area[k + j];
+        sv[j] += vol[k + j];
+      }
+    for (; k < n; ++k) {
+      sa[0] += area[k];
+      sv[0] += vol[k];
+    }
+    const double cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
+    const double cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
+    if (!(cell_area > 0.0))
+      return false;
+    // volume (eq. 7, oif_volume.hpp): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
+    const double sign = cell_volume < 0.0 ? -1.0 : 1.0;
+    const double volume_factor =
+        kv != 0.0 ? -kv * ((sign * cell_volume - V0) / V0) * sign / 6.0 : 0.0;
+    // global area (eq. 6): centroid allocation with kag (S - S0) S_t / S0
+    const double area_factor = ka_g != 0.0 ? ka_g * (cell_area - A0_g) / A0_g : 0.0;
+    int bad = 0;
+    PYOIF_INDEPENDENT_ITERATIONS
+    for (int q = 0; q < n; ++q) {
+      bad |= !(area[q] > 0.0);
+      const double ax_ = e1x[q], ay_ = e1y[q], az_ = e1z[q];
+      const double bx = e2x[q], by = e2y[q], bz = e2z[q];
+      const double max_ = (ax_ + bx) / 3.0, may = (ay_ + by) / 3.0, maz = (az_ + bz) / 3.0;
+      const double mbx = max_ - ax_, mby = may - ay_, mbz = maz - az_;
+      const double mcx = max_ - bx, mcy = may - by, mcz = maz - bz;
+      const double scale = area_factor * area[q] /
+                           (max_ * max_ + may * may + maz * maz + mbx * mbx + mby * mby +
+                            mbz * mbz + mcx * mcx + mcy * mcy + mcz * mcz);
+      const double vx = volume_factor * nx[q], vy = volume_factor * ny[q],
+                   vz = volume_factor * nz[q];
+      f0x[q] = scale * max_ + vx, f0y[q] = scale * may + vy, f0z[q] = scale * maz + vz;
+      f1x[q] = scale * mbx + vx, f1y[q] = scale * mby + vy, f1z[q] = scale * mbz + vz;
+      f2x[q] = scale * mcx + vx, f2y[q] = scale * mcy + vy, f2z[q] = scale * mcz + vz;
+    }
+    if (bad)
+      return false;
+    for (int q = 0; q < n; ++q) {
+      m_f[tri[q].v0] += Vec3(f0x[q], f0y[q], f0z[q]);
+      m_f[tri[q].v1] += Vec3(f1x[q], f1y[q], f1z[q]);
+      m_f[tri[q].v2] += Vec3(f2x[q], f2y[q], f2z[q]);
     }
   }
   return commit_forces(p);

@@ -113,15 +113,14 @@ private:
   std::vector<Triangle> m_triangles;
 
   // cells of a triangle group (OifGlobalForces, OifOutDirection)
-  std::vector<int> m_cell_mol;       ///< cell -> mol_id
-  std::vector<int> m_cell_reference; ///< cell -> slot of its reference node
-  std::vector<int> m_triangle_mol;   ///< triangle -> mol_id of its first node at build
-  std::vector<double> m_cell_area, m_cell_volume;
-  std::vector<double> m_cell_volume_factor; ///< eq. 7 force per unit N of this step
-  std::vector<Vec3> m_cell_origin;          ///< unfolded reference point of this step
-  std::vector<Vec3> m_tri_normal;           ///< (b - a) x (c - a) of this step
-  std::vector<double> m_tri_area;           ///< area of this step
-  std::vector<double> m_outward_sign;       ///< OifOutDirection: +1/-1 per triangle
+  std::vector<int> m_cell_mol;           ///< cell -> mol_id
+  std::vector<int> m_cell_reference;     ///< cell -> slot of its reference node
+  std::vector<int> m_triangle_mol;       ///< triangle -> mol_id of its first node at build
+  std::vector<std::size_t> m_cell_begin; ///< cell -> first triangle (triangles sorted by cell)
+  std::vector<Vec3> m_cell_origin;       ///< unfolded reference point of this step
+  static constexpr int kCellArrays = 23; ///< per-triangle arrays of one cell's pass
+  std::vector<double> m_scratch;         ///< kCellArrays x (largest cell's triangles)
+  std::vector<double> m_outward_sign;    ///< OifOutDirection: +1/-1 per triangle
 };
 
 } // namespace pyoif::oif
