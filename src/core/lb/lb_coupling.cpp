@@ -1,10 +1,12 @@
 #include "lb/lb_coupling.hpp"
 
+#include "utils/errors.hpp"
 #include "utils/random.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 
 namespace pyoif::lb {
 
@@ -17,27 +19,41 @@ struct Stencil {
   std::array<double, 8> weight;
 };
 
-Stencil stencil(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
-  const Vec3 p = box.folded(pos) / fluid.agrid() - Vec3::Constant(0.5);
+/** i folded into [0, n): one add or subtract for the usual case (positions
+ *  are folded at every re-sort and move less than the skin in between). */
+inline int wrap_node(int i, int n) {
+  if (i < 0)
+    i += n;
+  else if (i >= n)
+    i -= n;
+  if (static_cast<unsigned>(i) >= static_cast<unsigned>(n)) // far outside the box
+    i = ((i % n) + n) % n;
+  return i;
+}
+
+Stencil stencil(const LBFluid& fluid, const Vec3& pos) {
+  const double inv_agrid = 1.0 / fluid.agrid();
   const Vec3i& n = fluid.grid();
   int node[3][2]; // the two node indices per axis, folded into [0, N)
   double frac[3];
   for (int d = 0; d < 3; ++d) {
-    const double fl = std::floor(p[d]);
-    int lo = static_cast<int>(fl);
-    frac[d] = p[d] - fl;
-    // p lies in [-0.5, N - 0.5), so lo in [-1, N - 1] (N when round-off puts
-    // a folded position at L): fold without a division
-    if (lo >= n[d])
-      lo -= n[d];
-    node[d][0] = lo < 0 ? lo + n[d] : lo;
-    node[d][1] = lo + 1 >= n[d] ? lo + 1 - n[d] : lo + 1;
+    const double x = pos[d] * inv_agrid - 0.5;
+    if (!(std::abs(x) < 1e9)) // NaN or flown away: no index to compute
+      throw SimulationInstability("lattice-Boltzmann coupling: particle position (" +
+                                  std::to_string(pos[0]) + ", " + std::to_string(pos[1]) + ", " +
+                                  std::to_string(pos[2]) +
+                                  ") is not finite or far outside the box");
+    const double fl = std::floor(x);
+    const int lo = static_cast<int>(fl);
+    frac[d] = x - fl;
+    node[d][0] = wrap_node(lo, n[d]);
+    node[d][1] = wrap_node(lo + 1, n[d]);
   }
   Stencil s;
   int m = 0;
-  for (int dx = 0; dx < 2; ++dx)
+  for (int dz = 0; dz < 2; ++dz)
     for (int dy = 0; dy < 2; ++dy)
-      for (int dz = 0; dz < 2; ++dz, ++m) {
+      for (int dx = 0; dx < 2; ++dx, ++m) {
         s.node[m] = fluid.padded_index_in_box(node[0][dx], node[1][dy], node[2][dz]);
         s.weight[m] = (dx ? frac[0] : 1.0 - frac[0]) * (dy ? frac[1] : 1.0 - frac[1]) *
                       (dz ? frac[2] : 1.0 - frac[2]);
@@ -48,14 +64,14 @@ Stencil stencil(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
 } // namespace
 
 Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
-  const Stencil s = stencil(fluid, box, pos);
+  const Stencil s = stencil(fluid, box.folded(pos));
   Vec3 u = Vec3::Zero();
   for (int m = 0; m < 8; ++m)
     u += s.weight[m] * fluid.velocity_at_index(s.node[m]);
   return u;
 }
 
-void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
+void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& /*box*/,
                       const CouplingParams& params, std::uint64_t step, double time_step) {
   if (params.gamma <= 0.0)
     return;
@@ -64,11 +80,11 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   auto deposit = [&](const Stencil& s, const Vec3& impulse) {
     const Vec3 p = scale * impulse;
     for (int m = 0; m < 8; ++m) {
-      const std::size_t node = s.node[m];
+      double* g = field + 3 * s.node[m];
       const double wgt = s.weight[m];
-      field[0][node] += wgt * p[0];
-      field[1][node] += wgt * p[1];
-      field[2][node] += wgt * p[2];
+      g[0] += wgt * p[0];
+      g[1] += wgt * p[1];
+      g[2] += wgt * p[2];
     }
   };
   // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
@@ -79,7 +95,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
   if (same_step)
     for (std::size_t i = 0; i < ledger.last_position.size(); ++i)
-      deposit(stencil(fluid, box, ledger.last_position[i]), -0.5 * ledger.last_impulse[i]);
+      deposit(stencil(fluid, ledger.last_position[i]), -0.5 * ledger.last_impulse[i]);
   ledger.any = true;
   ledger.step = step;
   auto& p = particles;
@@ -88,31 +104,31 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   ledger.last_impulse.resize(n);
   Vec3 impulse_sum = Vec3::Zero();
   // fresh velocity cache for this pass (the fluid may have changed since the last)
-  if (ledger.velocity_stamp.size() != fluid.n_padded_slots()) {
-    ledger.velocity_stamp.assign(fluid.n_padded_slots(), 0);
-    ledger.velocity_cache.resize(fluid.n_padded_slots());
+  if (ledger.velocity_cache.size() != fluid.n_padded_slots()) {
+    ledger.velocity_cache.assign(fluid.n_padded_slots(), {});
     ledger.stamp = 0;
   }
   if (++ledger.stamp == 0) {
-    std::fill(ledger.velocity_stamp.begin(), ledger.velocity_stamp.end(), 0);
+    for (auto& entry : ledger.velocity_cache)
+      entry.stamp = 0;
     ledger.stamp = 1;
   }
-  std::uint32_t* const stamps = ledger.velocity_stamp.data();
-  Vec3* const cache = ledger.velocity_cache.data();
+  auto* const cache = ledger.velocity_cache.data();
   const std::uint32_t stamp = ledger.stamp;
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
   for (std::size_t i = 0; i < n; ++i) {
-    const Stencil s = stencil(fluid, box, p.pos[i]);
+    const Stencil s = stencil(fluid, p.pos[i]);
     Vec3 u = Vec3::Zero();
     for (int m = 0; m < 8; ++m) {
       const std::size_t node = s.node[m];
-      if (stamps[node] != stamp) {
-        cache[node] = fluid.velocity_at_index(node);
-        stamps[node] = stamp;
+      auto& entry = cache[node];
+      if (entry.stamp != stamp) {
+        entry.u = fluid.velocity_at_index(node);
+        entry.stamp = stamp;
       }
-      u += s.weight[m] * cache[node];
+      u += s.weight[m] * entry.u;
     }
     Vec3 f = params.gamma * (u - p.vel[i]);
     if (noise > 0.0) {

@@ -324,8 +324,7 @@ void LBFluid::rebuild_geometry() {
         }
       }
     }
-  for (auto& f : m_field)
-    f.clear();
+  m_field.clear();
   m_field_used = false;
 }
 
@@ -453,12 +452,11 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
     m_f[population_slot(q, n)] = equilibrium(q, rho, u_lattice);
 }
 
-std::array<double*, 3> LBFluid::impulse_field() {
-  if (m_field[0].empty())
-    for (auto& f : m_field)
-      f.assign(m_stride, 0.0);
+double* LBFluid::impulse_field() {
+  if (m_field.empty())
+    m_field.assign(3 * m_stride, 0.0);
   m_field_used = true;
-  return {m_field[0].data(), m_field[1].data(), m_field[2].data()};
+  return m_field.data();
 }
 
 void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
@@ -466,7 +464,7 @@ void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
   // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
   const double scale = impulse_scale();
   for (int d = 0; d < 3; ++d)
-    field[d][n] += impulse[d] * scale;
+    field[3 * n + d] += impulse[d] * scale;
 }
 
 double LBFluid::total_mass() const {
@@ -494,7 +492,7 @@ Vec3 LBFluid::total_momentum() const {
     if (m_field_used)
       for (int d = 0; d < 3; ++d)
         for (int i = 0; i < r.length; ++i)
-          j[d] += m_field[d][r.start + i];
+          j[d] += m_field[3 * (r.start + i) + d];
   }
   return j * std::pow(m_p.agrid, 4) / m_p.tau - m_ledger.in_flight;
 }

@@ -144,9 +144,9 @@ public:
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
   /** The force field the next update applies, for bulk deposits: component d
-   *  of the field at padded index n is impulse_field()[d][n]; an impulse p
+   *  of the field at padded index n is impulse_field()[3 n + d]; an impulse p
    *  (MD units) adds p * impulse_scale(). Allocates the field on first use. */
-  std::array<double*, 3> impulse_field();
+  double* impulse_field();
   double impulse_scale() const {
     const double a2 = m_p.agrid * m_p.agrid;
     return m_p.tau / (a2 * a2); // momentum-density change per update, lattice units
@@ -170,8 +170,11 @@ public:
     /// Node velocities computed in the current coupling pass: each lattice
     /// node serves several membrane nodes, and its 19 populations lie in 19
     /// different streams, so computing it once per pass saves most misses.
-    std::vector<Vec3> velocity_cache;
-    std::vector<std::uint32_t> velocity_stamp;
+    struct CachedVelocity {
+      Vec3 u;                  ///< MD units
+      std::uint32_t stamp = 0; ///< valid when equal to the pass's stamp
+    };
+    std::vector<CachedVelocity> velocity_cache;
     std::uint32_t stamp = 0;
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
@@ -237,7 +240,9 @@ private:
   std::size_t m_stride = 0;
   double* m_f = nullptr;  ///< populations, 19 * stride, updated in place
   bool m_swapped = false; ///< after an odd number of updates (see top)
-  std::vector<double> m_field[3];
+  /// force density of the particle coupling, 3 components per node
+  /// (node-major: one cache line per deposit; the kernel reads it per block)
+  std::vector<double> m_field;
   bool m_field_used = false;
   std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)
   std::vector<BoundarySpec> m_boundaries;

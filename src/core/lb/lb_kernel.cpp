@@ -194,9 +194,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
   // the coupling's force field is read once and cleared in the same pass
   // (solid nodes keep theirs, which nothing reads; rebuild_geometry clears all)
-  double* __restrict gx = with_field ? m_field[0].data() : nullptr;
-  double* __restrict gy = with_field ? m_field[1].data() : nullptr;
-  double* __restrict gz = with_field ? m_field[2].data() : nullptr;
+  double* __restrict g = with_field ? m_field.data() : nullptr;
   const std::size_t begin = r.start, end = r.start + r.length;
   // a node out of range: its moments, recomputed from the populations that
   // are still unwritten (the caller throws, the update is abandoned)
@@ -236,12 +234,14 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         force[2][i] = fz;
       }
       if constexpr (with_field) {
+        double* __restrict gb = g + 3 * b0;
         for (int i = 0; i < len; ++i) {
-          force[0][i] += gx[b0 + i];
-          force[1][i] += gy[b0 + i];
-          force[2][i] += gz[b0 + i];
-          gx[b0 + i] = gy[b0 + i] = gz[b0 + i] = 0.0;
+          force[0][i] += gb[3 * i];
+          force[1][i] += gb[3 * i + 1];
+          force[2][i] += gb[3 * i + 2];
         }
+        for (int i = 0; i < 3 * len; ++i)
+          gb[i] = 0.0;
       }
       const double* in[Q];
       for (int q = 0; q < Q; ++q)
@@ -287,10 +287,10 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
       double F[3] = {fx, fy, fz};
       if constexpr (with_field) {
-        F[0] += gx[n];
-        F[1] += gy[n];
-        F[2] += gz[n];
-        gx[n] = gy[n] = gz[n] = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          F[d] += g[3 * n + d];
+          g[3 * n + d] = 0.0;
+        }
       }
       const NodeResult res = collide<false>(fn, F, l, out);
       if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
