@@ -61,17 +61,10 @@ constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
 /** Per-block arrays of the edge pass (structure of arrays). */
 struct EdgeBlock {
   double e[3][kBlock], u[3][kBlock], w[3][kBlock], dv[3][kBlock];
-  double r0[kBlock], inv_r0[kBlock], cos_psi0[kBlock], sin_psi0[kBlock];
   double l[kBlock], inv_l2[kBlock], coefficient[kBlock];
   double n1[3][kBlock], n2[3][kBlock], n1_2[kBlock], n2_2[kBlock];
   double sine[kBlock], cosine[kBlock], dphi[kBlock];
   double fa[3][kBlock], fb[3][kBlock], fc[3][kBlock], fd[3][kBlock];
-};
-
-/** Per-block arrays of the local-area pass. */
-struct TriangleBlock {
-  double e1[3][kBlock], e2[3][kBlock], weight[kBlock], area0[kBlock];
-  double f0[3][kBlock], f1[3][kBlock], f2[3][kBlock];
 };
 
 } // namespace
@@ -116,25 +109,37 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
     return false;
   const std::size_t n = group.size();
   m_bonds.resize(n);
-  m_triangles.clear();
-  // unique triangles, keyed by their sorted slots (21 bits each)
+  m_ref.resize(n);
+  // Unique triangles, keyed by their sorted slots (21 bits each). Each is
+  // evaluated by the first bond that has it (its "owner", in the owner's edge
+  // pass, from the vectors gathered there anyway) with weight = (bonds using
+  // it) / 3 and area0 = the sum of those bonds' reference areas / 3: the sum
+  // of the bonds' kal (S - S0_bond) / 3 of oif_local_forces.hpp is then
+  // kal (weight S - area0), applied once.
   if (m_index.size() >= (std::size_t(1) << 21))
     return false;
+  struct Use {
+    std::size_t bond;
+    int which; // 0: triangle ABC, 1: BCD
+  };
   std::unordered_map<std::uint64_t, int> triangle_of;
   triangle_of.reserve(n);
+  std::vector<Use> owner;
   std::vector<int> uses;
-  auto add_triangle = [&](int s0, int s1, int s2, double area0) {
+  std::vector<double> area0_sum;
+  auto add_triangle = [&](int s0, int s1, int s2, double area0, std::size_t bond, int which) {
     int lo = std::min({s0, s1, s2}), hi = std::max({s0, s1, s2});
     const int mid = s0 + s1 + s2 - lo - hi;
     const std::uint64_t key = static_cast<std::uint64_t>(lo) |
                               (static_cast<std::uint64_t>(mid) << 21) |
                               (static_cast<std::uint64_t>(hi) << 42);
-    auto [it, inserted] = triangle_of.try_emplace(key, static_cast<int>(m_triangles.size()));
+    auto [it, inserted] = triangle_of.try_emplace(key, static_cast<int>(owner.size()));
     if (inserted) {
-      m_triangles.push_back({s0, s1, s2, -1, 0.0, 0.0});
+      owner.push_back({bond, which});
       uses.push_back(0);
+      area0_sum.push_back(0.0);
     }
-    m_triangles[it->second].area0 += area0;
+    area0_sum[it->second] += area0;
     ++uses[it->second];
   };
   for (std::size_t b = 0; b < n; ++b) {
@@ -143,17 +148,19 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
     // the generic loop rejects these as degenerate (and throws): leave it to it
     if (!(ref[0] > 0.0) || !(ref[2] > 0.0) || !(ref[3] > 0.0) || !std::isfinite(ref[1]))
       return false;
+    m_bonds[b] = {s[0], s[1], s[2], s[3]};
+    m_ref.r0[b] = ref[0];
+    m_ref.inv_r0[b] = 1.0 / ref[0];
     // psi0 = pi - phi0: cos psi0 = -cos phi0, sin psi0 = sin phi0
-    m_bonds[b] = {
-        s[0], s[1], s[2], s[3], ref[0], 1.0 / ref[0], -std::cos(ref[1]), std::sin(ref[1])};
-    add_triangle(s[1], s[0], s[2], ref[2]); // A B C
-    add_triangle(s[0], s[2], s[3], ref[3]); // B C D
+    m_ref.cos_psi0[b] = -std::cos(ref[1]);
+    m_ref.sin_psi0[b] = std::sin(ref[1]);
+    add_triangle(s[1], s[0], s[2], ref[2], b, 0); // A B C
+    add_triangle(s[0], s[2], s[3], ref[3], b, 1); // B C D
   }
-  // each use adds kal (S - S0_bond) / 3 (oif_local_forces.hpp): summed,
-  // kal (uses/3 S - sum S0_bond / 3)
-  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    m_triangles[t].weight = uses[t] / 3.0;
-    m_triangles[t].area0 /= 3.0;
+  for (std::size_t t = 0; t < owner.size(); ++t) {
+    const std::size_t b = owner[t].bond;
+    (owner[t].which == 0 ? m_ref.weight1 : m_ref.weight2)[b] = uses[t] / 3.0;
+    (owner[t].which == 0 ? m_ref.area0_1 : m_ref.area0_2)[b] = area0_sum[t] / 3.0;
   }
   return true;
 }
@@ -178,7 +185,7 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
       m_cell_mol.push_back(mol);
       m_cell_reference.push_back(s[0]);
     }
-    m_triangles[t] = {s[0], s[1], s[2], it->second, 1.0, 0.0};
+    m_triangles[t] = {s[0], s[1], s[2], it->second};
   }
   const std::size_t n_cells = m_cell_mol.size();
   // triangles grouped by cell (a cell's are contiguous when created in bulk;
@@ -243,78 +250,29 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
   for (Vec3& f : m_f)
     f.setZero();
 
-  // Both passes work in blocks of bonds/triangles: gather the minimum-image
-  // edge vectors (indexed loads), then the arithmetic over plain arrays (short
-  // independent loops the compiler vectorises; the per-bond chain of square
-  // roots, divisions and the arctangent is long, so one bond at a time leaves
-  // the core waiting), then scatter the forces to the slots.
-
-  // local area (eq. 5), once per triangle
-  if (ia.kal != 0.0) {
-    const double kal = ia.kal;
-    TriangleBlock blk;
-    for (std::size_t first = 0; first < m_triangles.size(); first += kBlock) {
-      const int nb = static_cast<int>(std::min<std::size_t>(kBlock, m_triangles.size() - first));
-      const Triangle* tri = m_triangles.data() + first;
-      for (int k = 0; k < nb; ++k) {
-        const Vec3& x0 = m_x[tri[k].v0];
-        const Vec3 e1 = box.minimum_image(m_x[tri[k].v1], x0);
-        const Vec3 e2 = box.minimum_image(m_x[tri[k].v2], x0);
-        for (int d = 0; d < 3; ++d) {
-          blk.e1[d][k] = e1[d];
-          blk.e2[d][k] = e2[d];
-        }
-        blk.weight[k] = tri[k].weight;
-        blk.area0[k] = tri[k].area0;
-      }
-      int bad = 0;
-      for (int k = 0; k < nb; ++k) {
-        const double ax = blk.e1[0][k], ay = blk.e1[1][k], az = blk.e1[2][k];
-        const double bx = blk.e2[0][k], by = blk.e2[1][k], bz = blk.e2[2][k];
-        const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
-        const double area = 0.5 * std::sqrt(nx * nx + ny * ny + nz * nz);
-        bad |= !(area > 0.0);
-        // centroid allocation (add_centroid_allocated_edges)
-        const double max_ = (ax + bx) / 3.0, may = (ay + by) / 3.0, maz = (az + bz) / 3.0;
-        const double mbx = max_ - ax, mby = may - ay, mbz = maz - az;
-        const double mcx = max_ - bx, mcy = may - by, mcz = maz - bz;
-        const double scale = kal * (blk.weight[k] * area - blk.area0[k]) /
-                             (max_ * max_ + may * may + maz * maz + mbx * mbx + mby * mby +
-                              mbz * mbz + mcx * mcx + mcy * mcy + mcz * mcz);
-        blk.f0[0][k] = scale * max_;
-        blk.f0[1][k] = scale * may;
-        blk.f0[2][k] = scale * maz;
-        blk.f1[0][k] = scale * mbx;
-        blk.f1[1][k] = scale * mby;
-        blk.f1[2][k] = scale * mbz;
-        blk.f2[0][k] = scale * mcx;
-        blk.f2[1][k] = scale * mcy;
-        blk.f2[2][k] = scale * mcz;
-      }
-      if (bad)
-        return false;
-      for (int k = 0; k < nb; ++k) {
-        m_f[tri[k].v0] += Vec3(blk.f0[0][k], blk.f0[1][k], blk.f0[2][k]);
-        m_f[tri[k].v1] += Vec3(blk.f1[0][k], blk.f1[1][k], blk.f1[2][k]);
-        m_f[tri[k].v2] += Vec3(blk.f2[0][k], blk.f2[1][k], blk.f2[2][k]);
-      }
-    }
-  }
-
-  // edges: stretching (eq. 3), viscosity, bending (eq. 4)
-  const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
-  const bool edge_terms = ks != 0.0 || kslin != 0.0 || kvisc != 0.0;
+  // One pass over the bonds in blocks: gather the minimum-image edge vectors
+  // (indexed loads), then the arithmetic over plain arrays (short independent
+  // loops the compiler vectorises; one bond at a time, its long chain of square
+  // roots, divisions and the arctangent leaves the core waiting), then scatter
+  // the forces on the four nodes.
+  const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb, kal = ia.kal;
+  const bool wings = kb != 0.0 || kal != 0.0; // terms that need a and d
   EdgeBlock blk;
   for (std::size_t first = 0; first < m_bonds.size(); first += kBlock) {
     const int nb = static_cast<int>(std::min<std::size_t>(kBlock, m_bonds.size() - first));
     const EdgeBond* bond = m_bonds.data() + first;
+    const double *r0 = m_ref.r0.data() + first, *inv_r0 = m_ref.inv_r0.data() + first;
+    const double *cos_psi0 = m_ref.cos_psi0.data() + first,
+                 *sin_psi0 = m_ref.sin_psi0.data() + first;
+    const double *weight1 = m_ref.weight1.data() + first, *area0_1 = m_ref.area0_1.data() + first;
+    const double *weight2 = m_ref.weight2.data() + first, *area0_2 = m_ref.area0_2.data() + first;
     for (int k = 0; k < nb; ++k) {
       const EdgeBond& bd = bond[k];
       const Vec3& xb = m_x[bd.b];
       const Vec3 e = box.minimum_image(m_x[bd.c], xb); // c - b, the shared edge
       for (int d = 0; d < 3; ++d)
         blk.e[d][k] = e[d];
-      if (kb != 0.0) {
+      if (wings) {
         const Vec3 u = box.minimum_image(m_x[bd.a], xb); // a - b
         const Vec3 w = box.minimum_image(m_x[bd.d], xb); // d - b
         for (int d = 0; d < 3; ++d) {
@@ -327,10 +285,6 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
         for (int d = 0; d < 3; ++d)
           blk.dv[d][k] = dv[d];
       }
-      blk.r0[k] = bd.r0;
-      blk.inv_r0[k] = bd.inv_r0;
-      blk.cos_psi0[k] = bd.cos_psi0;
-      blk.sin_psi0[k] = bd.sin_psi0;
     }
     int bad = 0;
     for (int k = 0; k < nb; ++k) {
@@ -342,37 +296,37 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
     }
     if (bad)
       return false;
-    // force on b along e (c gets the opposite): eq. 3 and the viscosity
+
+    // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
     for (int k = 0; k < nb; ++k)
       blk.coefficient[k] = 0.0;
-    if (edge_terms) {
-      if (ks != 0.0)
-        for (int k = 0; k < nb; ++k) {
-          const double l = blk.l[k];
-          blk.coefficient[k] += ks * neo_hookean_kappa(l * blk.inv_r0[k]) * (l - blk.r0[k]) * l *
-                                blk.inv_l2[k]; // (l - l0) / l
-        }
-      if (kslin != 0.0)
-        for (int k = 0; k < nb; ++k)
-          blk.coefficient[k] += kslin * (blk.l[k] - blk.r0[k]) * blk.l[k] * blk.inv_l2[k];
-      if (kvisc != 0.0)
-        for (int k = 0; k < nb; ++k)
-          blk.coefficient[k] += kvisc *
-                                (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] +
-                                 blk.dv[2][k] * blk.e[2][k]) *
-                                blk.inv_l2[k];
-      if (kb == 0.0) // else added with the bending forces (one scatter)
-        for (int k = 0; k < nb; ++k) {
-          const Vec3 fe = blk.coefficient[k] * Vec3(blk.e[0][k], blk.e[1][k], blk.e[2][k]);
-          m_f[bond[k].b] += fe;
-          m_f[bond[k].c] -= fe;
-        }
-    }
-    if (kb != 0.0) {
-      // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
-      // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
-      // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
-      int slow = 0;
+    if (ks != 0.0)
+      for (int k = 0; k < nb; ++k) {
+        const double l = blk.l[k];
+        blk.coefficient[k] +=
+            ks * neo_hookean_kappa(l * inv_r0[k]) * (l - r0[k]) * l * blk.inv_l2[k]; // (l - l0) / l
+      }
+    if (kslin != 0.0)
+      for (int k = 0; k < nb; ++k)
+        blk.coefficient[k] += kslin * (blk.l[k] - r0[k]) * blk.l[k] * blk.inv_l2[k];
+    if (kvisc != 0.0)
+      for (int k = 0; k < nb; ++k)
+        blk.coefficient[k] +=
+            kvisc *
+            (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] + blk.dv[2][k] * blk.e[2][k]) *
+            blk.inv_l2[k];
+    for (int k = 0; k < nb; ++k)
+      for (int d = 0; d < 3; ++d) {
+        const double fe = blk.coefficient[k] * blk.e[d][k];
+        blk.fa[d][k] = 0.0;
+        blk.fb[d][k] = fe;
+        blk.fc[d][k] = -fe;
+        blk.fd[d][k] = 0.0;
+      }
+
+    if (wings) {
+      // the triangles' normals n1 = (a - b) x e (triangle ABC) and
+      // n2 = e x (d - b) (BCD), |n| = twice the area
       for (int k = 0; k < nb; ++k) {
         const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
         const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
@@ -381,26 +335,34 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
         const double n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
         const double n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
         const double n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
-        bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0);
-        const double y = blk.l[k] * (n1x * wx + n1y * wy + n1z * wz);
-        const double x = n1x * n2x + n1y * n2y + n1z * n2z;
-        const double c0 = blk.cos_psi0[k], s0 = blk.sin_psi0[k];
-        const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
-        const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
-        slow |= !small;
-        const double t = small ? sine / cosine : 0.0;
-        blk.dphi[k] = -atan_small(t);
-        blk.sine[k] = sine;
-        blk.cosine[k] = cosine;
-        for (int d = 0; d < 3; ++d) {
-          blk.n1[d][k] = d == 0 ? n1x : d == 1 ? n1y : n1z;
-          blk.n2[d][k] = d == 0 ? n2x : d == 1 ? n2y : n2z;
-        }
+        bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0); // degenerate triangle
+        blk.n1[0][k] = n1x, blk.n1[1][k] = n1y, blk.n1[2][k] = n1z;
+        blk.n2[0][k] = n2x, blk.n2[1][k] = n2y, blk.n2[2][k] = n2z;
         blk.n1_2[k] = n1_2;
         blk.n2_2[k] = n2_2;
       }
       if (bad)
         return false;
+    }
+
+    if (kb != 0.0) {
+      // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
+      // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
+      // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
+      int slow = 0;
+      for (int k = 0; k < nb; ++k) {
+        const double y = blk.l[k] * (blk.n1[0][k] * blk.w[0][k] + blk.n1[1][k] * blk.w[1][k] +
+                                     blk.n1[2][k] * blk.w[2][k]);
+        const double x =
+            blk.n1[0][k] * blk.n2[0][k] + blk.n1[1][k] * blk.n2[1][k] + blk.n1[2][k] * blk.n2[2][k];
+        const double c0 = cos_psi0[k], s0 = sin_psi0[k];
+        const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
+        const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+        slow |= !small;
+        blk.dphi[k] = -atan_small(small ? sine / cosine : 0.0);
+        blk.sine[k] = sine;
+        blk.cosine[k] = cosine;
+      }
       if (slow) // deviations beyond atan(1/4): the library's arctangent
         for (int k = 0; k < nb; ++k) {
           const double sine = blk.sine[k], cosine = blk.cosine[k];
@@ -424,19 +386,56 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
             blk.inv_l2[k];
         for (int d = 0; d < 3; ++d) {
           const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
-          blk.fa[d][k] = fa;
-          blk.fd[d][k] = fd;
-          const double fe = blk.coefficient[k] * blk.e[d][k];
-          blk.fb[d][k] = fe - ((1.0 - ta) * fa + (1.0 - td) * fd);
-          blk.fc[d][k] = -fe - (ta * fa + td * fd);
+          blk.fa[d][k] += fa;
+          blk.fd[d][k] += fd;
+          blk.fb[d][k] -= (1.0 - ta) * fa + (1.0 - td) * fd;
+          blk.fc[d][k] -= ta * fa + td * fd;
         }
       }
+    }
+
+    if (kal != 0.0) {
+      // local area (eq. 5) of the triangles this bond owns (weight 0 else),
+      // centroid allocation (oif_area.hpp); vertices relative to b:
+      // ABC = (u, 0, e), BCD = (0, e, w)
       for (int k = 0; k < nb; ++k) {
-        const EdgeBond& bd = bond[k];
+        const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
+        const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
+        const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
+        {
+          const double tx = (ux + ex) / 3.0, ty = (uy + ey) / 3.0, tz = (uz + ez) / 3.0;
+          const double mux = tx - ux, muy = ty - uy, muz = tz - uz; // T - a
+          const double mex = tx - ex, mey = ty - ey, mez = tz - ez; // T - c
+          const double area = 0.5 * std::sqrt(blk.n1_2[k]);
+          const double scale = kal * (weight1[k] * area - area0_1[k]) /
+                               (mux * mux + muy * muy + muz * muz + tx * tx + ty * ty + tz * tz +
+                                mex * mex + mey * mey + mez * mez);
+          blk.fa[0][k] += scale * mux, blk.fa[1][k] += scale * muy, blk.fa[2][k] += scale * muz;
+          blk.fb[0][k] += scale * tx, blk.fb[1][k] += scale * ty, blk.fb[2][k] += scale * tz;
+          blk.fc[0][k] += scale * mex, blk.fc[1][k] += scale * mey, blk.fc[2][k] += scale * mez;
+        }
+        {
+          const double tx = (ex + wx) / 3.0, ty = (ey + wy) / 3.0, tz = (ez + wz) / 3.0;
+          const double mex = tx - ex, mey = ty - ey, mez = tz - ez; // T - c
+          const double mwx = tx - wx, mwy = ty - wy, mwz = tz - wz; // T - d
+          const double area = 0.5 * std::sqrt(blk.n2_2[k]);
+          const double scale = kal * (weight2[k] * area - area0_2[k]) /
+                               (tx * tx + ty * ty + tz * tz + mex * mex + mey * mey + mez * mez +
+                                mwx * mwx + mwy * mwy + mwz * mwz);
+          blk.fb[0][k] += scale * tx, blk.fb[1][k] += scale * ty, blk.fb[2][k] += scale * tz;
+          blk.fc[0][k] += scale * mex, blk.fc[1][k] += scale * mey, blk.fc[2][k] += scale * mez;
+          blk.fd[0][k] += scale * mwx, blk.fd[1][k] += scale * mwy, blk.fd[2][k] += scale * mwz;
+        }
+      }
+    }
+
+    for (int k = 0; k < nb; ++k) {
+      const EdgeBond& bd = bond[k];
+      m_f[bd.b] += Vec3(blk.fb[0][k], blk.fb[1][k], blk.fb[2][k]);
+      m_f[bd.c] += Vec3(blk.fc[0][k], blk.fc[1][k], blk.fc[2][k]);
+      if (wings) {
         m_f[bd.a] += Vec3(blk.fa[0][k], blk.fa[1][k], blk.fa[2][k]);
         m_f[bd.d] += Vec3(blk.fd[0][k], blk.fd[1][k], blk.fd[2][k]);
-        m_f[bd.b] += Vec3(blk.fb[0][k], blk.fb[1][k], blk.fb[2][k]);
-        m_f[bd.c] += Vec3(blk.fc[0][k], blk.fc[1][k], blk.fc[2][k]);
       }
     }
   }

@@ -62,21 +62,27 @@ public:
   std::size_t n_builds() const { return m_n_builds; }
 
 private:
-  /** One OifLocalForces bond (B, A, C, D) as slots, with its references:
-   *  relaxed length and the relaxed dihedral as psi0 = pi - phi0. */
+  /** One OifLocalForces bond (B, A, C, D) as slots. */
   struct EdgeBond {
-    int b, a, c, d;
-    double r0, inv_r0, cos_psi0, sin_psi0;
+    int b = 0, a = 0, c = 0, d = 0;
   };
-  /** One triangle as slots. For OifLocalForces: weight = (bonds using it) / 3
-   *  and area0 = the sum of those bonds' reference areas / 3, so that
-   *  kal (weight S - area0) is the sum of the bonds' kal (S - S0_bond) / 3. For
-   *  the triangle groups: cell slot and the sign that makes its normal point
-   *  out of the cell (OifOutDirection). */
+  /** Per-bond reference values, one array each (vectorised loops): relaxed
+   *  length, the relaxed dihedral as psi0 = pi - phi0, and the local area
+   *  terms of the triangles ABC (1) and BCD (2) where the bond owns them
+   *  (weight 0 otherwise; see build_local). */
+  struct EdgeReferences {
+    std::vector<double> r0, inv_r0, cos_psi0, sin_psi0;
+    std::vector<double> weight1, area0_1, weight2, area0_2;
+    void resize(std::size_t n) {
+      for (auto* v : {&r0, &inv_r0, &cos_psi0, &sin_psi0, &weight1, &area0_1, &weight2, &area0_2})
+        v->assign(n, 0.0);
+    }
+  };
+  /** One triangle of a triangle group (OifGlobalForces, OifOutDirection) as
+   *  slots, with its cell. */
   struct Triangle {
     int v0, v1, v2;
     int cell;
-    double weight, area0;
   };
 
   struct Key {
@@ -110,6 +116,7 @@ private:
   std::vector<Vec3> m_v;    ///< slot -> velocity (membrane viscosity only)
   std::vector<Vec3> m_f;    ///< slot -> force (or normal) accumulated this step
   std::vector<EdgeBond> m_bonds;
+  EdgeReferences m_ref;
   std::vector<Triangle> m_triangles;
 
   // cells of a triangle group (OifGlobalForces, OifOutDirection)
