@@ -23,11 +23,36 @@ void System::add_bonded_forces(Energies* e) {
   const bool fast = e == nullptr && bonded_fast_path && comm.size() == 1;
   if (fast && m_fast_plans.size() != bonded.size())
     m_fast_plans.resize(bonded.size());
+  // An OifOutDirection group over exactly the triangles of an earlier
+  // OifGlobalForces group (an OifCellType's) takes its normals from that
+  // group's pass: normals_source[j] = that group's id, or -1.
+  std::vector<int> normals_source;
+  if (fast) {
+    normals_source.assign(bonded.size(), -1);
+    for (auto& plan : m_fast_plans)
+      plan.write_normals = false;
+    for (std::size_t j = 0; j < bonded.size(); ++j) {
+      if (!std::holds_alternative<OifOutDirection>(bonded[j].interaction))
+        continue;
+      for (std::size_t i = 0; i < j; ++i)
+        if (std::holds_alternative<OifGlobalForces>(bonded[i].interaction) &&
+            !m_fast_plans[i].write_normals &&
+            m_fast_plans[j].same_triangles(bonded[j].bonds, bonded[i].bonds)) {
+          normals_source[j] = static_cast<int>(i);
+          m_fast_plans[i].write_normals = true;
+          break;
+        }
+    }
+  }
   for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id) {
     BondedEntry& entry = bonded[bond_id];
     std::visit(
         [&](auto& ia) {
           using IA = std::decay_t<decltype(ia)>;
+          if constexpr (std::is_same_v<IA, OifOutDirection>)
+            if (fast && normals_source[bond_id] >= 0 &&
+                m_fast_plans[normals_source[bond_id]].normals_written())
+              return;
           if constexpr (oif::has_fast_path<IA>)
             if (fast && m_fast_plans[bond_id].run(ia, entry.bonds, p, box))
               return;

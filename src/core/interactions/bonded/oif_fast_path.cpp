@@ -453,11 +453,14 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     m_usable = build_triangles(group, p);
     ++m_n_builds;
   }
+  m_normals_written = false;
   if (!m_usable)
     return false;
   gather_positions(p);
   for (Vec3& f : m_f)
     f.setZero();
+  if (write_normals)
+    m_normal.assign(m_index.size(), Vec3::Zero());
   const double ka_g = ia.ka_g, kv = ia.kv, A0_g = ia.A0_g, V0 = ia.V0;
   // Cell by cell: its triangles' edges and first vertices gathered, then
   // normals, areas and volumes over plain arrays (vectorised), the cell's sums,
@@ -543,8 +546,33 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
       m_f[tri[q].v1] += Vec3(f1x[q], f1y[q], f1z[q]);
       m_f[tri[q].v2] += Vec3(f2x[q], f2y[q], f2z[q]);
     }
+    if (write_normals) // OifOutDirection's area-weighted normals, outward by the volume's sign
+      for (int q = 0; q < n; ++q) {
+        const Vec3 nq = sign * Vec3(nx[q], ny[q], nz[q]);
+        m_normal[tri[q].v0] += nq;
+        m_normal[tri[q].v1] += nq;
+        m_normal[tri[q].v2] += nq;
+      }
   }
-  return commit_forces(p);
+  if (!commit_forces(p))
+    return false;
+  if (write_normals) {
+    for (std::size_t s = 0; s < m_index.size(); ++s) {
+      const double len = m_normal[s].norm();
+      p.normal[m_index[s]] = len > 0.0 ? Vec3(m_normal[s] / len) : m_normal[s];
+    }
+    m_normals_written = true;
+  }
+  return true;
+}
+
+bool FastBondPlan::same_triangles(const BondGroup& own, const BondGroup& source) {
+  const Link now{own.ids.data(), own.ids.size(), source.ids.data(), source.ids.size()};
+  if (!(now == m_link)) {
+    m_link = now;
+    m_link_same = own.n_particles == 3 && source.n_particles == 3 && own.ids == source.ids;
+  }
+  return m_link_same;
 }
 
 // ---------------------------------------------------------------------------

@@ -58,6 +58,16 @@ public:
   bool run(const OifOutDirection& ia, const BondGroup& group, ParticleStore& p,
            const BoxGeometry& box);
 
+  /** OifGlobalForces plans: also write the node normals of OifOutDirection
+   *  (set when an OifOutDirection group has exactly this group's triangles,
+   *  as an OifCellType's have), saving that group its own pass. */
+  bool write_normals = false;
+  /** Whether the last run() wrote the normals (it succeeded, write_normals). */
+  bool normals_written() const { return m_normals_written; }
+  /** OifOutDirection plans: whether `source` (an OifGlobalForces group) has
+   *  exactly the triangles of `own`; compared once per change of either. */
+  bool same_triangles(const BondGroup& own, const BondGroup& source);
+
   /** Number of (re)builds so far (tests: the plan is reused across steps). */
   std::size_t n_builds() const { return m_n_builds; }
 
@@ -106,6 +116,20 @@ private:
   void gather_positions(const ParticleStore& p);
   /** Adds the slot forces to the particles if all are finite. */
   bool commit_forces(ParticleStore& p) const;
+
+  struct Link {
+    const int* own = nullptr;
+    std::size_t n_own = 0;
+    const int* source = nullptr;
+    std::size_t n_source = 0;
+    bool operator==(const Link& o) const {
+      return own == o.own && n_own == o.n_own && source == o.source && n_source == o.n_source;
+    }
+  };
+  Link m_link;
+  bool m_link_same = false;
+  bool m_normals_written = false;
+  std::vector<Vec3> m_normal; ///< slot -> normal accumulated (write_normals)
 
   Key m_key;
   bool m_usable = false; ///< false: the group cannot use the fast path (generic loop)
