@@ -324,6 +324,11 @@ void LBFluid::rebuild_geometry() {
         }
       }
     }
+  m_bounce_back.clear();
+  for (const Link& l : m_links)
+    m_bounce_back.push_back(
+        {l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, l.wall_term});
+  build_halo_pairs();
   m_field.clear();
   m_field_used = false;
 }
@@ -416,18 +421,26 @@ Vec3 LBFluid::node_velocity(const Vec3i& node) const {
 Populations LBFluid::node_populations(const Vec3i& node) const {
   const std::size_t n = checked_node(node);
   Populations f;
+  if (m_flag[n]) {
+    // a solid node holds no fluid: report the equilibrium of the values its
+    // density and velocity accessors give (dens, the boundary's velocity)
+    const Vec3 u = m_boundaries[m_flag[n] - 1].velocity * m_p.tau / m_p.agrid;
+    for (int q = 0; q < Q; ++q)
+      f[q] = equilibrium(q, m_p.density, u);
+    return f;
+  }
   for (int q = 0; q < Q; ++q)
     f[q] = m_f[population_slot(q, n)];
   return f;
 }
 
 Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
-  const std::size_t n = checked_node(node);
+  const Populations f = node_populations(node);
   Mat3 pi = Mat3::Zero();
   for (int q = 0; q < Q; ++q)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
-        pi(a, b) += c[q][a] * c[q][b] * m_f[population_slot(q, n)];
+        pi(a, b) += c[q][a] * c[q][b] * f[q];
   const double scale = m_p.agrid * m_p.agrid / (m_p.tau * m_p.tau);
   return pi * scale;
 }

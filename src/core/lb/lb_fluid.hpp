@@ -207,6 +207,7 @@ private:
   }
   std::size_t checked_node(const Vec3i& node) const;
   void rebuild_geometry();
+  void build_halo_pairs();
   void apply_bounce_back(double* f) const;
   /** Where an update found a node out of the model's range. */
   struct BadNode {
@@ -248,6 +249,19 @@ private:
   std::vector<BoundarySpec> m_boundaries;
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
+  /// the links as the update uses them: slot q of the solid node, slot -q of
+  /// the fluid node (offsets into m_f)
+  struct BounceBack {
+    std::size_t solid_slot, fluid_slot;
+    double wall_term;
+  };
+  std::vector<BounceBack> m_bounce_back;
+  /// ghost-layer places (offsets into m_f, population included) and their
+  /// periodic images that the halo exchange copies, fluid ones only
+  struct HaloPair {
+    std::size_t ghost, image;
+  };
+  std::vector<HaloPair> m_halo;
   std::size_t m_n_fluid = 0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
   std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};

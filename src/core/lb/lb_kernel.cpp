@@ -318,15 +318,19 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   return false;
 }
 
-void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+void LBFluid::build_halo_pairs() {
   // Region o of the ghost layer (26 of them) holds the populations whose
-  // velocity points into it (c_d = o_d wherever o_d != 0), at the ghosts that
-  // a domain node reaches with c_q. After an odd update they are what that
-  // node pushed out, folded here into the periodic image; after an even
-  // update the odd update will read them there, so they are filled from it.
-  for (int ox = -1; ox <= 1; ++ox)
+  // velocity points into it (c_d = o_d wherever o_d != 0), at the ghosts g
+  // that a domain node n = g - c_q reaches. After an odd update they are what
+  // n pushed out, to be folded into the periodic image g'; after an even
+  // update the odd update will read them at g, so they are filled from g'.
+  // Only pairs where n and g are fluid are kept: a solid n pushes nothing
+  // and reads nothing, and a solid g is served by the bounce-back links. So
+  // channel walls cost no halo traffic at all.
+  m_halo.clear();
+  for (int oz = -1; oz <= 1; ++oz)
     for (int oy = -1; oy <= 1; ++oy)
-      for (int oz = -1; oz <= 1; ++oz) {
+      for (int ox = -1; ox <= 1; ++ox) {
         if (ox == 0 && oy == 0 && oz == 0)
           continue;
         const int o[3] = {ox, oy, oz};
@@ -351,27 +355,33 @@ void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
           if (!moves_in)
             continue;
           // along an axis the region spans (o_d = 0), only ghosts whose
-          // pushing node g - c_q lies in the domain hold a population; the
-          // others belong to a neighbouring edge or corner region
+          // node g - c_q lies in the domain take part; the others belong to
+          // a neighbouring edge or corner region
           int qlo[3], qhi[3];
           for (int d = 0; d < 3; ++d) {
             qlo[d] = o[d] == 0 ? std::max(lo[d], 1 + c[q][d]) : lo[d];
             qhi[d] = o[d] == 0 ? std::min(hi[d], m_n[d] + c[q][d]) : hi[d];
           }
-          double* fq = f + q * m_stride;
+          const std::size_t slot = static_cast<std::size_t>(q) * m_stride;
           for (int z = qlo[2]; z <= qhi[2]; ++z)
-            for (int y = qlo[1]; y <= qhi[1]; ++y) {
-              const std::size_t base = index(qlo[0], y, z); // x contiguous
-              const int len = qhi[0] - qlo[0] + 1;
-              if (fill_ghosts)
-                for (int x = 0; x < len; ++x)
-                  fq[base + x] = fq[base + x + delta];
-              else
-                for (int x = 0; x < len; ++x)
-                  fq[base + x + delta] = fq[base + x];
-            }
+            for (int y = qlo[1]; y <= qhi[1]; ++y)
+              for (int x = qlo[0]; x <= qhi[0]; ++x) {
+                const std::size_t g = index(x, y, z);
+                if (m_flag[g] != 0 || m_flag[g - m_offset[q]] != 0)
+                  continue;
+                m_halo.push_back({slot + g, slot + g + delta});
+              }
         }
       }
+}
+
+void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+  if (fill_ghosts)
+    for (const HaloPair& h : m_halo)
+      f[h.ghost] = f[h.image];
+  else
+    for (const HaloPair& h : m_halo)
+      f[h.image] = f[h.ghost];
 }
 
 void LBFluid::apply_bounce_back(double* f) const {
@@ -381,13 +391,12 @@ void LBFluid::apply_bounce_back(double* f) const {
   // solid node's slot q and goes to the fluid node's slot -q; after an even
   // update it sits in the fluid node's slot -q and goes to the solid node's
   // slot q, where the next (odd) update reads the fluid node's f_{-q}.
-  const std::size_t S = m_stride;
   if (m_swapped)
-    for (const Link& l : m_links)
-      f[l.q * S + l.solid] = f[opposite(l.q) * S + l.node] - l.wall_term;
+    for (const BounceBack& b : m_bounce_back)
+      f[b.solid_slot] = f[b.fluid_slot] - b.wall_term;
   else
-    for (const Link& l : m_links)
-      f[opposite(l.q) * S + l.node] = f[l.q * S + l.solid] - l.wall_term;
+    for (const BounceBack& b : m_bounce_back)
+      f[b.fluid_slot] = f[b.solid_slot] - b.wall_term;
 }
 
 void LBFluid::report_instability(const BadNode& bad) const {
