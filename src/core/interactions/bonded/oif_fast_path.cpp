@@ -56,6 +56,18 @@ inline double atan_small(double t) {
   return t * pz;
 }
 
+/** The minimum image of box_geometry.hpp on n separations along one periodic
+ *  axis of length L, as a loop over an array (vectorisable, no branch per
+ *  vector component in the gather): the same expression, applied where
+ *  |d| > L/2. */
+inline void minimum_image_axis(double* d, int n, double L) {
+  const double half = 0.5 * L;
+  for (int k = 0; k < n; ++k) {
+    const double x = d[k];
+    d[k] = std::abs(x) > half ? x - L * std::round(x / L) : x;
+  }
+}
+
 constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
 
 /** Per-block arrays of the edge pass (structure of arrays). */
@@ -269,12 +281,12 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
     for (int k = 0; k < nb; ++k) {
       const EdgeBond& bd = bond[k];
       const Vec3& xb = m_x[bd.b];
-      const Vec3 e = box.minimum_image(m_x[bd.c], xb); // c - b, the shared edge
+      const Vec3 e = m_x[bd.c] - xb; // c - b, the shared edge (minimum image below)
       for (int d = 0; d < 3; ++d)
         blk.e[d][k] = e[d];
       if (wings) {
-        const Vec3 u = box.minimum_image(m_x[bd.a], xb); // a - b
-        const Vec3 w = box.minimum_image(m_x[bd.d], xb); // d - b
+        const Vec3 u = m_x[bd.a] - xb; // a - b
+        const Vec3 w = m_x[bd.d] - xb; // d - b
         for (int d = 0; d < 3; ++d) {
           blk.u[d][k] = u[d];
           blk.w[d][k] = w[d];
@@ -286,6 +298,14 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
           blk.dv[d][k] = dv[d];
       }
     }
+    for (int d = 0; d < 3; ++d)
+      if (box.periodic()[d]) {
+        minimum_image_axis(blk.e[d], nb, box.length()[d]);
+        if (wings) {
+          minimum_image_axis(blk.u[d], nb, box.length()[d]);
+          minimum_image_axis(blk.w[d], nb, box.length()[d]);
+        }
+      }
     int bad = 0;
     for (int k = 0; k < nb; ++k) {
       const double l2 =
@@ -481,8 +501,8 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     const Vec3 origin = box.unfolded(p.pos[ref], p.image[ref]);
     for (int k = 0; k < n; ++k) {
       const Vec3& x0 = m_x[tri[k].v0];
-      const Vec3 e1 = box.minimum_image(m_x[tri[k].v1], x0);
-      const Vec3 e2 = box.minimum_image(m_x[tri[k].v2], x0);
+      const Vec3 e1 = m_x[tri[k].v1] - x0; // minimum image below
+      const Vec3 e2 = m_x[tri[k].v2] - x0;
       // first vertex relative to the cell's reference point, unfolded
       // (oif_cell_sums.hpp): a . (b x c) = a . N with N = (b - a) x (c - a)
       const Vec3 a = box.unfolded(x0, p.image[m_index[tri[k].v0]]) - origin;
@@ -490,6 +510,11 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
       e2x[k] = e2[0], e2y[k] = e2[1], e2z[k] = e2[2];
       ax[k] = a[0], ay[k] = a[1], az[k] = a[2];
     }
+    for (int d = 0; d < 3; ++d)
+      if (box.periodic()[d]) {
+        minimum_image_axis(arr(d), n, box.length()[d]);     // e1
+        minimum_image_axis(arr(3 + d), n, box.length()[d]); // e2
+      }
     PYOIF_INDEPENDENT_ITERATIONS
     for (int k = 0; k < n; ++k) {
       const double x = e1y[k] * e2z[k] - e1z[k] * e2y[k];
