@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 // The per-cell arrays of the triangle passes are disjoint slices of one
@@ -183,7 +184,9 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
     return false;
   const std::size_t n = group.size();
   m_triangles.resize(n);
-  m_triangle_mol.resize(n);
+  m_slot_mol.resize(m_index.size());
+  for (std::size_t k = 0; k < m_index.size(); ++k)
+    m_slot_mol[k] = p.mol_id[m_index[k]];
   m_cell_mol.clear();
   m_cell_reference.clear();
   // cells as the generic cell sums define them: the mol_id of a triangle's
@@ -205,10 +208,8 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
   std::stable_sort(m_triangles.begin(), m_triangles.end(),
                    [](const Triangle& a, const Triangle& b) { return a.cell < b.cell; });
   m_cell_begin.assign(n_cells + 1, 0);
-  for (std::size_t t = 0; t < n; ++t) {
-    m_triangle_mol[t] = m_cell_mol[m_triangles[t].cell];
+  for (std::size_t t = 0; t < n; ++t)
     ++m_cell_begin[m_triangles[t].cell + 1];
-  }
   std::size_t largest = 0;
   for (std::size_t c = 0; c < n_cells; ++c) {
     largest = std::max<std::size_t>(largest, m_cell_begin[c + 1]);
@@ -219,11 +220,14 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
   return true;
 }
 
-bool FastBondPlan::cells_unchanged(const ParticleStore& p) const {
-  for (std::size_t t = 0; t < m_triangles.size(); ++t)
-    if (p.mol_id[m_index[m_triangles[t].v0]] != m_triangle_mol[t])
-      return false;
-  return true;
+bool FastBondPlan::gather_positions_same_cells(const ParticleStore& p) {
+  int same = 1;
+  for (std::size_t s = 0; s < m_index.size(); ++s) {
+    const int i = m_index[s];
+    m_x[s] = p.pos[i];
+    same &= p.mol_id[i] == m_slot_mol[s];
+  }
+  return same;
 }
 
 void FastBondPlan::gather_positions(const ParticleStore& p) {
@@ -232,10 +236,15 @@ void FastBondPlan::gather_positions(const ParticleStore& p) {
 }
 
 bool FastBondPlan::commit_forces(ParticleStore& p) const {
-  double check = 0.0;
-  for (const Vec3& f : m_f)
-    check += f[0] + f[1] + f[2];
-  if (!std::isfinite(check)) // NaN or inf anywhere: the generic loop names the bond
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "m_f is read as an array of doubles");
+  // NaN or inf anywhere: decline, the generic loop names the bond
+  const double* f = m_f.empty() ? nullptr : m_f[0].data();
+  const std::size_t n = 3 * m_f.size();
+  const double largest = std::numeric_limits<double>::max();
+  int finite = 1;
+  for (std::size_t k = 0; k < n; ++k)
+    finite &= std::abs(f[k]) <= largest;
+  if (!finite)
     return false;
   for (std::size_t s = 0; s < m_index.size(); ++s)
     p.force[m_index[s]] += m_f[s];
@@ -468,7 +477,7 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
 bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, ParticleStore& p,
                        const BoxGeometry& box) {
   const Key key = key_of(group, p, kind_global);
-  if (!(key == m_key) || (m_usable && !cells_unchanged(p))) {
+  if (!(key == m_key)) {
     m_key = key;
     m_usable = build_triangles(group, p);
     ++m_n_builds;
@@ -476,7 +485,13 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
   m_normals_written = false;
   if (!m_usable)
     return false;
-  gather_positions(p);
+  if (!gather_positions_same_cells(p)) { // a mol_id changed: the cells regroup
+    m_usable = build_triangles(group, p);
+    ++m_n_builds;
+    if (!m_usable)
+      return false;
+    gather_positions(p);
+  }
   for (Vec3& f : m_f)
     f.setZero();
   if (write_normals)

@@ -112,7 +112,9 @@ private:
   bool build_slots(const BondGroup& group, const ParticleStore& p, std::vector<int>& bond_slots);
   bool build_local(const BondGroup& group, const ParticleStore& p);
   bool build_triangles(const BondGroup& group, const ParticleStore& p);
-  bool cells_unchanged(const ParticleStore& p) const;
+  /** gather_positions(), and whether every node still has the mol_id of the
+   *  build (the cells of a triangle group are mol_ids). */
+  bool gather_positions_same_cells(const ParticleStore& p);
   void gather_positions(const ParticleStore& p);
   /** Adds the slot forces to the particles if all are finite. */
   bool commit_forces(ParticleStore& p) const;
@@ -146,7 +148,7 @@ private:
   // cells of a triangle group (OifGlobalForces, OifOutDirection)
   std::vector<int> m_cell_mol;           ///< cell -> mol_id
   std::vector<int> m_cell_reference;     ///< cell -> slot of its reference node
-  std::vector<int> m_triangle_mol;       ///< triangle -> mol_id of its first node at build
+  std::vector<int> m_slot_mol;           ///< slot -> mol_id at build
   std::vector<std::size_t> m_cell_begin; ///< cell -> first triangle (triangles sorted by cell)
   std::vector<Vec3> m_cell_origin;       ///< unfolded reference point of this step
   static constexpr int kCellArrays = 23; ///< per-triangle arrays of one cell's pass
