@@ -103,32 +103,47 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   ledger.last_position.resize(n);
   ledger.last_impulse.resize(n);
   Vec3 impulse_sum = Vec3::Zero();
-  // fresh velocity cache for this pass (the fluid may have changed since the last)
-  if (ledger.velocity_cache.size() != fluid.n_padded_slots()) {
-    ledger.velocity_cache.assign(fluid.n_padded_slots(), {});
-    ledger.stamp = 0;
+  // Three passes: (1) stencils, marking the lattice nodes they need; (2)
+  // those nodes' velocities, in memory order; (3) forces and deposits.
+  if (ledger.velocity.size() != fluid.n_padded_slots()) {
+    ledger.velocity.assign(fluid.n_padded_slots(), Vec3::Zero());
+    ledger.needed.assign((fluid.n_padded_slots() + 63) / 64, 0);
   }
-  if (++ledger.stamp == 0) {
-    for (auto& entry : ledger.velocity_cache)
-      entry.stamp = 0;
-    ledger.stamp = 1;
+  ledger.stencil_nodes.resize(8 * n);
+  ledger.stencil_weights.resize(8 * n);
+  std::size_t* const nodes = ledger.stencil_nodes.data();
+  double* const weights = ledger.stencil_weights.data();
+  std::uint64_t* const needed = ledger.needed.data();
+  Vec3* const velocity = ledger.velocity.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Stencil s = stencil(fluid, p.pos[i]);
+    for (int m = 0; m < 8; ++m) {
+      nodes[8 * i + m] = s.node[m];
+      weights[8 * i + m] = s.weight[m];
+      needed[s.node[m] >> 6] |= std::uint64_t{1} << (s.node[m] & 63);
+    }
   }
-  auto* const cache = ledger.velocity_cache.data();
-  const std::uint32_t stamp = ledger.stamp;
+  for (std::size_t word = 0; word < ledger.needed.size(); ++word) {
+    std::uint64_t bits = needed[word];
+    if (!bits)
+      continue;
+    needed[word] = 0;
+    do {
+      const std::size_t node = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
+      velocity[node] = fluid.velocity_at_index(node);
+      bits &= bits - 1;
+    } while (bits);
+  }
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
   for (std::size_t i = 0; i < n; ++i) {
-    const Stencil s = stencil(fluid, p.pos[i]);
+    Stencil s;
     Vec3 u = Vec3::Zero();
     for (int m = 0; m < 8; ++m) {
-      const std::size_t node = s.node[m];
-      auto& entry = cache[node];
-      if (entry.stamp != stamp) {
-        entry.u = fluid.velocity_at_index(node);
-        entry.stamp = stamp;
-      }
-      u += s.weight[m] * entry.u;
+      s.node[m] = nodes[8 * i + m];
+      s.weight[m] = weights[8 * i + m];
+      u += s.weight[m] * velocity[s.node[m]];
     }
     Vec3 f = params.gamma * (u - p.vel[i]);
     if (noise > 0.0) {

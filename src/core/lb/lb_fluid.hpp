@@ -167,15 +167,16 @@ public:
     /// spread with the stencil of that position)
     std::vector<Vec3> last_position, last_impulse;
     Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
-    /// Node velocities computed in the current coupling pass: each lattice
-    /// node serves several membrane nodes, and its 19 populations lie in 19
-    /// different streams, so computing it once per pass saves most misses.
-    struct CachedVelocity {
-      Vec3 u;                  ///< MD units
-      std::uint32_t stamp = 0; ///< valid when equal to the pass's stamp
-    };
-    std::vector<CachedVelocity> velocity_cache;
-    std::uint32_t stamp = 0;
+    /// Node velocities of the current coupling pass, valid at the nodes the
+    /// pass marked in `needed` (one bit per padded node): each lattice node
+    /// serves several membrane nodes, and its 19 populations lie in 19
+    /// different streams, so they are computed once per pass, in memory
+    /// order (x neighbours share cache lines, the prefetchers see streams).
+    std::vector<Vec3> velocity;
+    std::vector<std::uint64_t> needed;
+    /// the 8 stencil nodes and weights per particle of the current pass
+    std::vector<std::size_t> stencil_nodes;
+    std::vector<double> stencil_weights;
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
 
