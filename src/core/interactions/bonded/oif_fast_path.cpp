@@ -25,19 +25,6 @@ namespace {
 
 constexpr int kind_local = 0, kind_global = 1, kind_out_direction = 2;
 
-/** The centroid allocation of oif_area.hpp (Jancigova & Cimrak 2015) for a
- *  triangle given by its edges e1 = b - a, e2 = c - a: F(X) = coefficient *
- *  vec(XT) / sum |XT|^2. Adds to fa, fb, fc. */
-inline void add_centroid_allocated_edges(const Vec3& e1, const Vec3& e2, double coefficient,
-                                         Vec3& fa, Vec3& fb, Vec3& fc) {
-  const Vec3 ma = (e1 + e2) / 3.0; // T - a
-  const Vec3 mb = ma - e1, mc = ma - e2;
-  const double scale = coefficient / (ma.squaredNorm() + mb.squaredNorm() + mc.squaredNorm());
-  fa += scale * ma;
-  fb += scale * mb;
-  fc += scale * mc;
-}
-
 /** atan(t) for |t| <= 1/4 (dihedral deviations below 14 degrees, most of a
  *  membrane's): t P(t^2), P the Chebyshev economisation on [0, 1/16] of the
  *  Taylor series of atan(sqrt s)/sqrt s, derived in exact rational arithmetic

@@ -4,26 +4,35 @@
 // the order of floating-point operations, at a fraction of its cost.
 //
 // Derived once per set of bonds and particles (rebuilt when the particle
-// store's layout version, the bonds or, for the global forces, a cell's mol_id
+// store's layout version, the bonds or, for the global forces, a node's mol_id
 // change): the local particle index of every node the group touches (compact
-// "slots", so a step does no id -> index lookups), each bond as four slots, the
-// unique triangles of the group, and the cells. Per step:
-//  - OifLocalForces: one pass over the unique triangles for the local area
-//    (eq. 5) -- each triangle once, with the mean of its bonds' reference areas
-//    instead of 1/3 in each of its three bonds -- then one pass over the edges
-//    for stretching (eq. 3), viscosity and bending (eq. 4), with the dihedral
-//    angle's sine from (n1 x n2).e = |e|^2 n1.(d - b) (one cross product less)
-//    and no energies (the time-step loop never reads them).
-//  - OifGlobalForces: one pass over the triangles for the per-cell area and
-//    volume (eqs. 6, 7; volume as a.N/6 with N the triangle's (b-a)x(c-a) and
-//    a its first vertex relative to the cell's reference point, unfolded), one
-//    pass for the forces.
-//  - OifOutDirection: one pass over the triangles for the node normals.
+// "slots", so a step does no id -> index lookups), each bond as four slots with
+// its reference values as arrays, the unique triangles, and the cells. Each
+// pass works in blocks: gather the separations (indexed loads), minimum image
+// and all arithmetic as loops over plain arrays (vectorised), scatter the
+// forces to the slots. Per step:
+//  - OifLocalForces: one pass over the edges: stretching (eq. 3), viscosity,
+//    bending (eq. 4) -- the deviation from the relaxed angle taken as one
+//    angle, its sine from (n1 x n2).e = |e|^2 n1.(d - b), a polynomial
+//    arctangent below 14 degrees, std::atan2 above -- and the local area
+//    (eq. 5) of each unique triangle once, in the first bond that has it,
+//    with the mean of its bonds' reference areas (the generic loop applies
+//    1/3 in each of its three bonds). No energies (the time-step loop never
+//    reads them).
+//  - OifGlobalForces, cell by cell: the triangles' normals, the cell's area
+//    and volume (eqs. 6, 7; volume as sum a.N/6, N = (b-a)x(c-a), a the first
+//    vertex relative to the cell's reference point, unfolded), the forces;
+//    and the node normals of an OifOutDirection group over the same triangles
+//    (write_normals), which then needs no pass of its own.
+//  - OifOutDirection otherwise: one pass over the triangles for the normals.
 // Forces are accumulated per slot and added to the particles only when the
 // whole group succeeded: on a degenerate or broken bond (or any non-finite
 // force) run() returns false without touching the particles, and the caller
 // runs the generic loop, which throws the SimulationInstability naming the
 // bond. Energies, analysis and multi-rank runs use the generic loop.
+// Positions: as the generic loop, separations by the minimum image (edges
+// shorter than half the box), the volume from unfolded positions (a cell's
+// nodes move continuously, as the integrator moves them).
 #pragma once
 
 #include "interactions/bonded/bond_group.hpp"
