@@ -45,14 +45,16 @@ inline double atan_small(double t) {
 }
 
 /** The minimum image of box_geometry.hpp on n separations along one periodic
- *  axis of length L, as a loop over an array (vectorisable, no branch per
- *  vector component in the gather): the same expression, applied where
- *  |d| > L/2. */
+ *  axis of length L, as a loop over an array that vectorises (no branch per
+ *  vector component in the gather): where |d| > L/2, d - L n with n the
+ *  nearest integer to d/L (as BoxGeometry::minimum_image; only a separation
+ *  of exactly a half-integer number of boxes, ambiguous anyway, can round the
+ *  other way). */
 inline void minimum_image_axis(double* d, int n, double L) {
-  const double half = 0.5 * L;
+  const double half = 0.5 * L, inv_L = 1.0 / L;
   for (int k = 0; k < n; ++k) {
     const double x = d[k];
-    d[k] = std::abs(x) > half ? x - L * std::round(x / L) : x;
+    d[k] = std::abs(x) > half ? x - L * std::nearbyint(x * inv_L) : x;
   }
 }
 
