@@ -100,6 +100,40 @@ class FastPathMatchesGeneric(unittest.TestCase):
         system.integrator.run(20)
         self.compare(system, "node removed, 20 steps")
 
+    def test_bonds_by_hand(self):
+        """Bonds added by hand: a strip of triangle pairs (an open mesh, so
+        triangles in one or two bonds) with ks and kslin together and
+        ESPResSo-style per-instance references, across the periodic boundary;
+        a tetrahedron of OifGlobalForces + OifOutDirection triangles across a
+        corner of the box."""
+        from lbmd.interactions import OifGlobalForces, OifLocalForces, OifOutDirection
+        rng = np.random.default_rng(3)
+        system = lbmd.System(box_l=[6.0, 6.0, 6.0])
+        system.time_step = 0.01
+        system.cell_system.skin = 0.3
+        # a zigzag strip: nodes 0..7 around x = 0 (= 6), triangles (i, i+1, i+2)
+        strip = np.array([[0.5 * i - 1.7, 1.0 + 0.8 * (i % 2), 2.0] for i in range(8)])
+        strip += rng.normal(scale=0.08, size=strip.shape)
+        # unfolded positions, continuous over the cell as the integrator keeps
+        # them (the cell sums of both paths need that); folded onto both sides
+        tetra = np.array([[5.6, 5.7, 0.3], [6.5, 5.8, 0.1], [5.9, 6.6, 0.2], [6.0, 6.0, -0.6]])
+        ids = system.part.add(pos=np.vstack([strip, tetra]), v=rng.normal(scale=0.2, size=(12, 3))).id
+        local = OifLocalForces(r0=0.6, ks=0.05, kslin=0.03, phi0=2.9, kb=0.07, A01=0.2, A02=0.25,
+                               kal=0.04, kvisc=0.02)
+        system.bonded_inter.add(local)
+        # pairs (i, i+1, i+2) and (i+1, i+2, i+3) share the edge (i+1, i+2): rows (B, A, C, D)
+        system.part.add_bonds(local, np.array([[ids[i + 1], ids[i], ids[i + 2], ids[i + 3]]
+                                               for i in range(5)]))
+        glob = OifGlobalForces(A0_g=3.0, ka_g=0.5, V0=0.6, kv=0.8)
+        out = OifOutDirection()
+        system.bonded_inter.add(glob)
+        system.bonded_inter.add(out)
+        t = ids[8:]
+        tris = np.array([[t[0], t[2], t[1]], [t[0], t[1], t[3]], [t[1], t[2], t[3]], [t[0], t[3], t[2]]])
+        system.part.add_bonds(glob, tris)
+        system.part.add_bonds(out, tris)
+        print(f"bonds by hand: relative force difference {self.compare(system, 'bonds by hand'):.1e}")
+
     def test_broken_bond_raises_the_same(self):
         system, cells = make(dict(ks=0.05, kb=0.08))
         # one edge's ends on top of each other: zero length
