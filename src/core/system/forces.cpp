@@ -34,14 +34,24 @@ void System::add_bonded_forces(Energies* e) {
     for (std::size_t j = 0; j < bonded.size(); ++j) {
       if (!std::holds_alternative<OifOutDirection>(bonded[j].interaction))
         continue;
-      for (std::size_t i = 0; i < j; ++i)
-        if (std::holds_alternative<OifGlobalForces>(bonded[i].interaction) &&
-            !m_fast_plans[i].write_normals &&
-            m_fast_plans[j].same_triangles(bonded[j].bonds, bonded[i].bonds)) {
-          normals_source[j] = static_cast<int>(i);
-          m_fast_plans[i].write_normals = true;
-          break;
-        }
+      oif::FastBondPlan& plan = m_fast_plans[j];
+      auto matches = [&](int i) {
+        return i >= 0 && static_cast<std::size_t>(i) < j &&
+               std::holds_alternative<OifGlobalForces>(bonded[i].interaction) &&
+               !m_fast_plans[i].write_normals &&
+               plan.same_triangles(bonded[j].bonds, bonded[i].bonds);
+      };
+      int source = -1;
+      if (matches(plan.normals_source)) // last step's partner first: the comparison is cached
+        source = plan.normals_source;
+      else
+        for (std::size_t i = 0; i < j && source < 0; ++i)
+          if (matches(static_cast<int>(i)))
+            source = static_cast<int>(i);
+      plan.normals_source = source;
+      normals_source[j] = source;
+      if (source >= 0)
+        m_fast_plans[source].write_normals = true;
     }
   }
   for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id) {

@@ -76,6 +76,9 @@ public:
   /** OifOutDirection plans: whether `source` (an OifGlobalForces group) has
    *  exactly the triangles of `own`; compared once per change of either. */
   bool same_triangles(const BondGroup& own, const BondGroup& source);
+  /** OifOutDirection plans: the bonded id of the group whose pass wrote the
+   *  normals at the last step, -1 if none (tried first next step). */
+  int normals_source = -1;
 
   /** Number of (re)builds so far (tests: the plan is reused across steps). */
   std::size_t n_builds() const { return m_n_builds; }
