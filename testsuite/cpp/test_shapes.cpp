@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -343,5 +344,72 @@ TEST(Shapes, DistanceGrowsAlongTheNormal) {
     }
     // A handful may sit on a medial surface (two closest features).
     EXPECT_GT(agree, 0.97 * checked) << agree << " of " << checked;
+  }
+}
+
+TEST(Shapes, BoundingBoxesContainTheSolid) {
+  // Outside its bounding box a shape's distance is at least the box's: the
+  // constraints and unions skip far points on that promise. Checked on the
+  // random cases (oblique rhomboid, tilted cylinder, sphere, union of them)
+  // plus an axis-aligned cuboid, which takes the clamped-box fast path.
+  auto cases = random_cases();
+  cases.push_back({"cuboid",
+                   std::make_shared<Rhomboid>(Vec3(-1, -0.5, 0.2), Vec3(0, 1.5, 0), Vec3(2, 0, 0),
+                                              Vec3(0, 0, 1.1)),
+                   true, true});
+  int bounded = 0;
+  for (const auto& cs : cases) {
+    SCOPED_TRACE(cs.label);
+    Vec3 lo, hi;
+    if (!cs.shape->bounding_box(lo, hi))
+      continue;
+    ++bounded;
+    int outside_box = 0;
+    for (std::uint64_t i = 0; i < 4000; ++i) {
+      const Vec3 pos = random_point(i, 3.0);
+      const double box = box_distance(pos, lo, hi);
+      const double dist = eval(*cs.shape, pos).dist;
+      if (box > 0.0) {
+        ++outside_box;
+        ASSERT_GE(dist, box - 1e-12) << "at " << pos.transpose();
+      }
+      EXPECT_EQ(cs.shape->farther_than(pos, 0.5), box >= 0.5);
+    }
+    EXPECT_GT(outside_box, 400); // the box is tight enough for both cases to occur
+    EXPECT_LT(outside_box, 3990);
+  }
+  // sphere, cylinder, rhomboid (direction +1), union, cuboid; complements,
+  // open cylinders and pores are unbounded
+  EXPECT_EQ(bounded, 5);
+}
+
+TEST(Union, SkippingFarMembersChangesNothing) {
+  // the union skips members whose box is farther than the best distance so
+  // far; the result must be the plain minimum over the members, bit for bit
+  auto u = std::make_shared<Union>();
+  std::vector<std::shared_ptr<Shape>> members;
+  for (int k = 0; k < 6; ++k) {
+    const Vec3 o(-2.5 + k, 0.3 * k - 1.0, -0.5 * (k % 3));
+    members.push_back(k % 2 ? std::shared_ptr<Shape>(std::make_shared<Rhomboid>(
+                                  o, Vec3(0.8, 0, 0), Vec3(0, 1.2, 0), Vec3(0, 0, 0.9)))
+                            : std::shared_ptr<Shape>(std::make_shared<Sphere>(o, 0.6)));
+    u->add(members.back());
+  }
+  u->add(std::make_shared<Wall>(Vec3(0, 0, 1), -2.5)); // unbounded: never skipped
+  members.push_back(u->shapes().back());
+  for (std::uint64_t i = 0; i < 4000; ++i) {
+    const Vec3 pos = random_point(i, 3.0);
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 best_normal = Vec3::UnitX();
+    for (const auto& m : members) {
+      const auto r = eval(*m, pos);
+      if (r.dist < best) {
+        best = r.dist;
+        best_normal = r.normal;
+      }
+    }
+    const auto r = eval(*u, pos);
+    ASSERT_EQ(r.dist, best) << "at " << pos.transpose();
+    ASSERT_EQ(r.normal, best_normal);
   }
 }

@@ -1,5 +1,6 @@
 #include "shapes/cylinder.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace pyoif::shapes {
@@ -62,6 +63,20 @@ void Cylinder::calc_dist(const Vec3& pos, double& dist, Vec3& normal) const {
   const double signed_solid = outside ? d : -d;
   dist = m_direction * signed_solid;
   normal = m_direction * (n_r * e_r + n_z * e_z);
+}
+
+bool Cylinder::bounding_box(Vec3& lo, Vec3& hi) const {
+  if (m_direction != 1 || m_open)
+    return false;
+  // extent along k: the axis part h |e_z,k| plus the disc's R sqrt(1 - e_z,k^2)
+  const Vec3& e = m_frame.e_z();
+  for (int k = 0; k < 3; ++k) {
+    const double half =
+        m_half_length * std::abs(e[k]) + m_radius * std::sqrt(std::max(0.0, 1.0 - e[k] * e[k]));
+    lo[k] = m_frame.center()[k] - half;
+    hi[k] = m_frame.center()[k] + half;
+  }
+  return true;
 }
 
 } // namespace pyoif::shapes

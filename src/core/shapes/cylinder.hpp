@@ -32,6 +32,7 @@ public:
   double length() const { return m_length; }
   int direction() const { return m_direction; }
   bool open() const { return m_open; }
+  bool bounding_box(Vec3& lo, Vec3& hi) const override;
 
 private:
   CylindricalFrame m_frame;

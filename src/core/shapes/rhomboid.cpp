@@ -29,6 +29,24 @@ Rhomboid::Rhomboid(const Vec3& corner, const Vec3& a, const Vec3& b, const Vec3&
   Eigen::Matrix3d edges;
   edges << a, b, c;
   m_to_skew = edges.inverse();
+  m_lo = m_hi = corner;
+  for (int i = 1; i < 8; ++i) {
+    const Vec3 p = corner + ((i & 1) ? a : Vec3::Zero()) + ((i & 2) ? b : Vec3::Zero()) +
+                   ((i & 4) ? c : Vec3::Zero());
+    m_lo = m_lo.cwiseMin(p);
+    m_hi = m_hi.cwiseMax(p);
+  }
+  // edges along three different axes: the solid is the box [m_lo, m_hi]
+  auto axis_of = [](const Vec3& e) {
+    int axis = -1;
+    for (int k = 0; k < 3; ++k)
+      if (e[k] != 0.0)
+        axis = axis == -1 ? k : 3;
+    return axis;
+  };
+  const int ia = axis_of(a), ib = axis_of(b), ic = axis_of(c);
+  m_axis_aligned = ia >= 0 && ia < 3 && ib >= 0 && ib < 3 && ic >= 0 && ic < 3 && ia != ib &&
+                   ib != ic && ia != ic;
 
   const Vec3 centre = corner + 0.5 * (a + b + c);
   const std::array<std::array<Vec3, 3>, 3> spans = {{{a, b, c}, {b, c, a}, {c, a, b}}};
@@ -92,6 +110,17 @@ void Rhomboid::calc_dist(const Vec3& pos, double& dist, Vec3& normal) const {
     dist = -m_direction * d;
     normal = m_direction * m_faces[best_face].outward;
     return;
+  }
+  if (m_axis_aligned) {
+    // a cuboid along the axes: its closest point is pos clamped to the box
+    // (the general search below gives the same point, at several times the cost)
+    const Vec3 closest = pos.cwiseMax(m_lo).cwiseMin(m_hi);
+    const double d = (pos - closest).norm();
+    if (d > 0.0) {
+      dist = m_direction * d;
+      normal = m_direction * (pos - closest) / d;
+      return;
+    }
   }
   // Outside: the closest point of the (convex) solid is the closest point over
   // the six faces.

@@ -23,6 +23,11 @@ public:
   const Vec3& b() const { return m_b; }
   const Vec3& c() const { return m_c; }
   int direction() const { return m_direction; }
+  bool bounding_box(Vec3& lo, Vec3& hi) const override {
+    lo = m_lo;
+    hi = m_hi;
+    return m_direction == 1;
+  }
 
 private:
   /** One face: the parallelogram origin + s u + t v, s, t in [0, 1]. */
@@ -37,7 +42,9 @@ private:
   Vec3 m_corner, m_a, m_b, m_c;
   int m_direction;
   std::array<Face, 6> m_faces;
-  Eigen::Matrix3d m_to_skew; ///< maps pos - corner to its (s, t, u) coordinates
+  Eigen::Matrix3d m_to_skew;   ///< maps pos - corner to its (s, t, u) coordinates
+  Vec3 m_lo, m_hi;             ///< axis-aligned box of the 8 corners
+  bool m_axis_aligned = false; ///< a cuboid with edges along the axes: [m_lo, m_hi]
 };
 
 } // namespace pyoif::shapes

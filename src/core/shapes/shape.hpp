@@ -5,9 +5,20 @@
 
 #include "utils/vector.hpp"
 
+#include <cmath>
 #include <string>
 
 namespace pyoif::shapes {
+
+/** Euclidean distance of pos from the axis-aligned box [lo, hi] (0 inside). */
+inline double box_distance(const Vec3& pos, const Vec3& lo, const Vec3& hi) {
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double out = pos[k] < lo[k] ? lo[k] - pos[k] : (pos[k] > hi[k] ? pos[k] - hi[k] : 0.0);
+    d2 += out * out;
+  }
+  return std::sqrt(d2);
+}
 
 class Shape {
 public:
@@ -25,6 +36,16 @@ public:
     return dist <= 0.0;
   }
   virtual std::string name() const = 0;
+  /** An axis-aligned box [lo, hi] that contains the whole solid; false for
+   *  unbounded solids (walls, complements). Outside the box the signed
+   *  distance is at least box_distance(pos, lo, hi), which lets the
+   *  constraints and unions skip the exact distance of far points. */
+  virtual bool bounding_box(Vec3& /*lo*/, Vec3& /*hi*/) const { return false; }
+  /** True when pos is certainly farther than `range` (> 0) from the solid. */
+  bool farther_than(const Vec3& pos, double range) const {
+    Vec3 lo, hi;
+    return bounding_box(lo, hi) && box_distance(pos, lo, hi) >= range;
+  }
 };
 
-}  // namespace pyoif::shapes
+} // namespace pyoif::shapes

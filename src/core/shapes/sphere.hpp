@@ -26,6 +26,13 @@ public:
     normal = m_direction * radial;
   }
   std::string name() const override { return "Sphere"; }
+  bool bounding_box(Vec3& lo, Vec3& hi) const override {
+    if (m_direction != 1)
+      return false;
+    lo = m_center - Vec3::Constant(m_radius);
+    hi = m_center + Vec3::Constant(m_radius);
+    return true;
+  }
   const Vec3& center() const { return m_center; }
   double radius() const { return m_radius; }
   int direction() const { return m_direction; }

@@ -19,10 +19,18 @@ public:
   void calc_dist(const Vec3& pos, double& dist, Vec3& normal) const override {
     dist = std::numeric_limits<double>::infinity();
     normal = Vec3::UnitX();
-    for (const auto& member : m_shapes) {
+    for (std::size_t k = 0; k < m_shapes.size(); ++k) {
+      const Member& box = m_boxes[k];
+      // outside a member's box its distance is at least the box's: a member
+      // that cannot come closer than the best so far is skipped (same result)
+      if (box.bounded) {
+        const double lower = box_distance(pos, box.lo, box.hi);
+        if (lower > 0.0 && lower >= dist)
+          continue;
+      }
       double d;
       Vec3 n;
-      member->calc_dist(pos, d, n);
+      m_shapes[k]->calc_dist(pos, d, n);
       if (d < dist) {
         dist = d;
         normal = n;
@@ -30,21 +38,39 @@ public:
     }
   }
   std::string name() const override { return "Union"; }
+  bool bounding_box(Vec3& lo, Vec3& hi) const override {
+    if (m_shapes.empty())
+      return false;
+    for (std::size_t k = 0; k < m_boxes.size(); ++k) {
+      if (!m_boxes[k].bounded)
+        return false;
+      lo = k ? Vec3(lo.cwiseMin(m_boxes[k].lo)) : m_boxes[k].lo;
+      hi = k ? Vec3(hi.cwiseMax(m_boxes[k].hi)) : m_boxes[k].hi;
+    }
+    return true;
+  }
 
   void add(std::shared_ptr<Shape> shape) {
     if (!shape)
       throw InputError("Union.add: parameter 'shape' must be a shape, got None");
     if (contains_union(*shape, this))
       throw InputError("Union.add: a union cannot contain itself");
+    Member box;
+    box.bounded = shape->bounding_box(box.lo, box.hi);
     m_shapes.push_back(std::move(shape));
+    m_boxes.push_back(box);
   }
   void remove(const std::shared_ptr<Shape>& shape) {
     const auto it = std::find(m_shapes.begin(), m_shapes.end(), shape);
     if (it == m_shapes.end())
       throw InputError("Union.remove: the shape is not a member of this union");
+    m_boxes.erase(m_boxes.begin() + (it - m_shapes.begin()));
     m_shapes.erase(it);
   }
-  void clear() { m_shapes.clear(); }
+  void clear() {
+    m_shapes.clear();
+    m_boxes.clear();
+  }
   std::size_t size() const { return m_shapes.size(); }
   const std::vector<std::shared_ptr<Shape>>& shapes() const { return m_shapes; }
 
@@ -61,7 +87,13 @@ private:
     return false;
   }
 
+  /// members' boxes (shapes do not change once made)
+  struct Member {
+    bool bounded = false;
+    Vec3 lo, hi;
+  };
   std::vector<std::shared_ptr<Shape>> m_shapes;
+  std::vector<Member> m_boxes;
 };
 
 } // namespace pyoif::shapes

@@ -22,4 +22,4 @@ private:
   double m_dist;
 };
 
-}  // namespace pyoif::shapes
+} // namespace pyoif::shapes

@@ -125,9 +125,17 @@ void System::add_constraint_forces(Energies* e) {
   c.normal_j = Vec3::Zero();
   for (auto& constraint : constraints) {
     constraint->total_force.setZero();
+    // a bounded shape (a block, a sphere...) is skipped by the particles
+    // farther from its bounding box than the interaction range: they feel no
+    // force and cannot have penetrated, and the box test is a few compares
+    // against an exact distance that may cost a hundred times more
+    Vec3 box_lo, box_hi;
+    const bool bounded = constraint->shape->bounding_box(box_lo, box_hi);
     for (std::size_t i = 0; i < p.n_local(); ++i) {
       const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
       if (!params)
+        continue;
+      if (bounded && shapes::box_distance(p.pos[i], box_lo, box_hi) >= params->range)
         continue;
       double dist;
       Vec3 normal;
