@@ -140,6 +140,19 @@ TEST(NeighbourSearch, ExclusionsAreHonoured) {
   s.cells.add_exclusion(2, 0);
   s.compute_forces();
   EXPECT_EQ(s.cells.pairs().size(), 2u);
+  // either order of the ids, several per particle, removal
+  s.cells.add_exclusion(0, 1);
+  s.compute_forces();
+  ASSERT_EQ(s.cells.pairs().size(), 1u);
+  EXPECT_TRUE(s.cells.excluded(1, 0) && s.cells.excluded(0, 2) && !s.cells.excluded(1, 2));
+  s.cells.remove_exclusion(0, 2);
+  s.compute_forces();
+  EXPECT_EQ(s.cells.pairs().size(), 2u);
+  EXPECT_FALSE(s.cells.excluded(2, 0));
+  EXPECT_FALSE(s.cells.excluded(7, 0)); // an id that has never been seen
+  s.cells.remove_exclusions_of(1);
+  s.compute_forces();
+  EXPECT_EQ(s.cells.pairs().size(), 3u);
 }
 
 TEST(NeighbourSearch, RangeLargerThanBoxIsAnError) {

@@ -90,9 +90,35 @@ bool positive(const Vec3i& s) {
       return s[d] > 0;
   return false;
 }
-}  // namespace
+} // namespace
+
+void CellSystem::build_exclusion_lists() {
+  int max_id = -1;
+  for (const std::uint64_t k : m_exclusions)
+    max_id = std::max(max_id, static_cast<int>(k & 0xffffffffu)); // the larger id of the pair
+  m_exclusion_start.assign(static_cast<std::size_t>(max_id) + 2, 0);
+  for (const std::uint64_t k : m_exclusions) {
+    ++m_exclusion_start[static_cast<std::size_t>(k >> 32) + 1];
+    ++m_exclusion_start[static_cast<std::size_t>(k & 0xffffffffu) + 1];
+  }
+  for (std::size_t i = 1; i < m_exclusion_start.size(); ++i)
+    m_exclusion_start[i] += m_exclusion_start[i - 1];
+  m_exclusion_partners.resize(m_exclusion_start.back());
+  std::vector<std::size_t> fill(m_exclusion_start.begin(), m_exclusion_start.end() - 1);
+  for (const std::uint64_t k : m_exclusions) {
+    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+    m_exclusion_partners[fill[a]++] = b;
+    m_exclusion_partners[fill[b]++] = a;
+  }
+  for (std::size_t i = 0; i + 1 < m_exclusion_start.size(); ++i)
+    std::sort(m_exclusion_partners.begin() + static_cast<std::ptrdiff_t>(m_exclusion_start[i]),
+              m_exclusion_partners.begin() + static_cast<std::ptrdiff_t>(m_exclusion_start[i + 1]));
+  m_exclusion_lists_valid = true;
+}
 
 void CellSystem::build_pairs(const ParticleStore& p, double range) {
+  if (!m_exclusion_lists_valid && !m_exclusions.empty())
+    build_exclusion_lists();
   const std::size_t n_local = p.n_local();
   const std::size_t n_all = n_local + p.n_ghost();
   if (n_all == 0)
@@ -142,9 +168,9 @@ void CellSystem::build_pairs(const ParticleStore& p, double range) {
   const double range2 = range * range;
   auto consider = [&](int a, int b) {
     if (static_cast<std::size_t>(a) >= n_local)
-      std::swap(a, b);  // a is local from here on (if either is)
+      std::swap(a, b); // a is local from here on (if either is)
     if (static_cast<std::size_t>(a) >= n_local)
-      return;  // ghost-ghost pairs belong to other owners
+      return; // ghost-ghost pairs belong to other owners
     const bool b_local = static_cast<std::size_t>(b) < n_local;
     if ((p.position(a) - p.position(b)).squaredNorm() >= range2)
       return;
@@ -161,8 +187,8 @@ void CellSystem::build_pairs(const ParticleStore& p, double range) {
   };
 
   // Half shell: the cell itself (i < j) and 13 of its 26 neighbours.
-  static const int shell[13][3] = {{1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0},  {-1, -1, 1},
-                                   {0, -1, 1}, {1, -1, 1}, {-1, 0, 1}, {0, 0, 1},  {1, 0, 1},
+  static const int shell[13][3] = {{1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0}, {-1, -1, 1},
+                                   {0, -1, 1}, {1, -1, 1}, {-1, 0, 1}, {0, 0, 1}, {1, 0, 1},
                                    {-1, 1, 1}, {0, 1, 1},  {1, 1, 1}};
   for (int cz = 0; cz < nc[2]; ++cz)
     for (int cy = 0; cy < nc[1]; ++cy)
@@ -196,4 +222,4 @@ void CellSystem::collect_ghost_forces(ParticleStore& p) const {
   }
 }
 
-}  // namespace pyoif
+} // namespace pyoif

@@ -39,14 +39,28 @@ public:
   /** Pairs of particle ids that must not interact (e.g. mesh neighbours). */
   void add_exclusion(int id1, int id2) {
     m_exclusions.insert(key(id1, id2));
+    m_exclusion_lists_valid = false;
     invalidate();
   }
   void remove_exclusion(int id1, int id2) {
     m_exclusions.erase(key(id1, id2));
+    m_exclusion_lists_valid = false;
     invalidate();
   }
   bool excluded(int id1, int id2) const {
-    return !m_exclusions.empty() && m_exclusions.count(key(id1, id2));
+    if (m_exclusions.empty())
+      return false;
+    if (!m_exclusion_lists_valid)
+      return m_exclusions.count(key(id1, id2)) != 0;
+    // the pair-list build asks this for every close pair: a scan of id1's
+    // short sorted list (mesh neighbours) instead of a hash probe
+    if (id1 < 0 || static_cast<std::size_t>(id1) + 1 >= m_exclusion_start.size())
+      return false;
+    const int* it = m_exclusion_partners.data() + m_exclusion_start[id1];
+    const int* end = m_exclusion_partners.data() + m_exclusion_start[id1 + 1];
+    for (; it != end && *it < id2; ++it) {
+    }
+    return it != end && *it == id2;
   }
   void remove_exclusions_of(int pid) {
     for (auto it = m_exclusions.begin(); it != m_exclusions.end();)
@@ -54,10 +68,12 @@ public:
         it = m_exclusions.erase(it);
       else
         ++it;
+    m_exclusion_lists_valid = false;
     invalidate();
   }
   void clear_exclusions() {
     m_exclusions.clear();
+    m_exclusion_lists_valid = false;
     invalidate();
   }
   std::size_t n_rebuilds() const { return m_n_rebuilds; }
@@ -72,6 +88,8 @@ private:
   }
   void make_ghosts(ParticleStore& p, const BoxGeometry& box, double range) const;
   void build_pairs(const ParticleStore& p, double range);
+  /** The exclusions as sorted partner lists per id (both directions). */
+  void build_exclusion_lists();
 
   bool m_valid = false;
   double m_range = 0.0;
@@ -80,8 +98,11 @@ private:
   std::vector<Vec3> m_pos_at_rebuild;
   std::vector<std::array<int, 2>> m_pairs;
   std::unordered_set<std::uint64_t> m_exclusions;
+  bool m_exclusion_lists_valid = false;
+  std::vector<std::size_t> m_exclusion_start; ///< by id, size max id + 2
+  std::vector<int> m_exclusion_partners;
   // cell binning scratch
   std::vector<int> m_cell_start, m_cell_particles;
 };
 
-}  // namespace pyoif
+} // namespace pyoif
