@@ -127,8 +127,15 @@ if rare:
     types.append(rare_type)
     counts.append(1)
     ptypes.append(1)
-region = ([SPLIT - 30.0, PARENT[0], 1.0], [SPLIT - 3.0, PARENT[1], height + 1.0])  # just upstream of the split
-cells = oif.seed_cells(system, types, counts=counts, boundaries=boundaries, region=region,
+# just upstream of the split; the paper's 40 RBCs need the whole channel
+# upstream, i.e. also the outlet, which leads into the inlet (periodic in x)
+region = ([SPLIT - 30.0, PARENT[0], 1.0], [SPLIT - 3.0, PARENT[1], height + 1.0])
+seeding_boundaries = boundaries
+if n_rbc > 12:
+    region = ([0.0, PARENT[0], 1.0], [L_X, PARENT[1], height + 1.0])
+    seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[SPLIT - 3.0, 0.0, 0.0], a=[JOIN - SPLIT + 6.0, 0, 0],
+                                                       b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
+cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
                        particle_types=ptypes, seed=args.seed)
 print(f"case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches {w_low}/{w_up}, "
       f"height {height}")
