@@ -25,6 +25,31 @@ namespace {
 
 constexpr int kind_local = 0, kind_global = 1, kind_out_direction = 2;
 
+/** Local-area force (eq. 5) of the triangle (p0, p1, p2), allocated through
+ *  its centroid T as in oif_area.hpp: vertex i gets scale (T - p_i), scale =
+ *  kal (weight A - A0) / sum_i |T - p_i|^2; weight 0 for a triangle another
+ *  bond owns. Vertices relative to the bond's owner (one of them is zero). */
+__attribute__((always_inline)) inline void
+centroid_area_force(const double (&p0)[3], const double (&p1)[3], const double (&p2)[3],
+                    double area, double weight, double area0, double kal, double* const (&f0)[3],
+                    double* const (&f1)[3], double* const (&f2)[3]) {
+  double m0[3], m1[3], m2[3], norm2 = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const double t = (p0[d] + p1[d] + p2[d]) / 3.0;
+    m0[d] = t - p0[d];
+    m1[d] = t - p1[d];
+    m2[d] = t - p2[d];
+  }
+  for (int d = 0; d < 3; ++d)
+    norm2 += m0[d] * m0[d] + m1[d] * m1[d] + m2[d] * m2[d];
+  const double scale = kal * (weight * area - area0) / norm2;
+  for (int d = 0; d < 3; ++d) {
+    *f0[d] += scale * m0[d];
+    *f1[d] += scale * m1[d];
+    *f2[d] += scale * m2[d];
+  }
+}
+
 /** atan(t) for |t| <= 1/4 (dihedral deviations below 14 degrees, most of a
  *  membrane's): t P(t^2), P the Chebyshev economisation on [0, 1/16] of the
  *  Taylor series of atan(sqrt s)/sqrt s, derived in exact rational arithmetic
@@ -417,33 +442,18 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
       // centroid allocation (oif_area.hpp); vertices relative to b:
       // ABC = (u, 0, e), BCD = (0, e, w)
       for (int k = 0; k < nb; ++k) {
-        const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
-        const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
-        const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
-        {
-          const double tx = (ux + ex) / 3.0, ty = (uy + ey) / 3.0, tz = (uz + ez) / 3.0;
-          const double mux = tx - ux, muy = ty - uy, muz = tz - uz; // T - a
-          const double mex = tx - ex, mey = ty - ey, mez = tz - ez; // T - c
-          const double area = 0.5 * std::sqrt(blk.n1_2[k]);
-          const double scale = kal * (weight1[k] * area - area0_1[k]) /
-                               (mux * mux + muy * muy + muz * muz + tx * tx + ty * ty + tz * tz +
-                                mex * mex + mey * mey + mez * mez);
-          blk.fa[0][k] += scale * mux, blk.fa[1][k] += scale * muy, blk.fa[2][k] += scale * muz;
-          blk.fb[0][k] += scale * tx, blk.fb[1][k] += scale * ty, blk.fb[2][k] += scale * tz;
-          blk.fc[0][k] += scale * mex, blk.fc[1][k] += scale * mey, blk.fc[2][k] += scale * mez;
-        }
-        {
-          const double tx = (ex + wx) / 3.0, ty = (ey + wy) / 3.0, tz = (ez + wz) / 3.0;
-          const double mex = tx - ex, mey = ty - ey, mez = tz - ez; // T - c
-          const double mwx = tx - wx, mwy = ty - wy, mwz = tz - wz; // T - d
-          const double area = 0.5 * std::sqrt(blk.n2_2[k]);
-          const double scale = kal * (weight2[k] * area - area0_2[k]) /
-                               (tx * tx + ty * ty + tz * tz + mex * mex + mey * mey + mez * mez +
-                                mwx * mwx + mwy * mwy + mwz * mwz);
-          blk.fb[0][k] += scale * tx, blk.fb[1][k] += scale * ty, blk.fb[2][k] += scale * tz;
-          blk.fc[0][k] += scale * mex, blk.fc[1][k] += scale * mey, blk.fc[2][k] += scale * mez;
-          blk.fd[0][k] += scale * mwx, blk.fd[1][k] += scale * mwy, blk.fd[2][k] += scale * mwz;
-        }
+        const double e[3] = {blk.e[0][k], blk.e[1][k], blk.e[2][k]};
+        const double u[3] = {blk.u[0][k], blk.u[1][k], blk.u[2][k]};
+        const double w[3] = {blk.w[0][k], blk.w[1][k], blk.w[2][k]};
+        const double zero[3] = {0.0, 0.0, 0.0};
+        double* fa[3] = {&blk.fa[0][k], &blk.fa[1][k], &blk.fa[2][k]};
+        double* fb[3] = {&blk.fb[0][k], &blk.fb[1][k], &blk.fb[2][k]};
+        double* fc[3] = {&blk.fc[0][k], &blk.fc[1][k], &blk.fc[2][k]};
+        double* fd[3] = {&blk.fd[0][k], &blk.fd[1][k], &blk.fd[2][k]};
+        centroid_area_force(u, zero, e, 0.5 * std::sqrt(blk.n1_2[k]), weight1[k], area0_1[k], kal,
+                            fa, fb, fc);
+        centroid_area_force(zero, e, w, 0.5 * std::sqrt(blk.n2_2[k]), weight2[k], area0_2[k], kal,
+                            fb, fc, fd);
       }
     }
 
