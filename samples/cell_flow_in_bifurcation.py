@@ -14,7 +14,7 @@ x = 110. Cells: Evans-Fung RBCs of radius 3.91 with 374 nodes and the paper's
 moduli (ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9); the rare cell a sphere
 of radius 7.5 (--full) with 642 nodes, 10x stiffer. Seeded at random in the
 parent channel just upstream of the split (oif.seed_cells). Default: 6 RBCs,
-channel height 14, 8 cycles of 500 steps (a few minutes on one core); --full:
+channel height 14, 8 cycles of 500 steps (about 20 s on one core); --full:
 the paper's 40 RBCs, height 20, the rare cell and 200 cycles.
 
 Output in DIR: cells.csv (time, cell, type, x, y, z, surface, volume,
