@@ -123,23 +123,14 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       needed[s.node[m] >> 6] |= std::uint64_t{1} << (s.node[m] & 63);
     }
   }
-  // the needed nodes of a bitmap word lie in one or two x rows: their
-  // velocities come from one vectorised pass over the word's span
-  alignas(64) double span_u[3][64];
   for (std::size_t word = 0; word < ledger.needed.size(); ++word) {
     std::uint64_t bits = needed[word];
     if (!bits)
       continue;
     needed[word] = 0;
-    const int lo = __builtin_ctzll(bits), hi = 63 - __builtin_clzll(bits);
-    const std::size_t first = 64 * word + static_cast<std::size_t>(lo);
-    fluid.span_velocities(first, hi - lo + 1, span_u[0], span_u[1], span_u[2]);
     do {
-      const int bit = __builtin_ctzll(bits);
-      const std::size_t node = 64 * word + static_cast<std::size_t>(bit);
-      velocity[node] = fluid.solid_at_index(node)
-                           ? fluid.velocity_at_index(node)
-                           : Vec3(span_u[0][bit - lo], span_u[1][bit - lo], span_u[2][bit - lo]);
+      const std::size_t node = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
+      velocity[node] = fluid.velocity_at_index(node);
       bits &= bits - 1;
     } while (bits);
   }

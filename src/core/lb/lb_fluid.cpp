@@ -168,9 +168,7 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
     m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][2]) * m_pad[1] + c[q][1]) * m_pad[0] + c[q][0];
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
   m_stride = ((nodes + 7) / 8) * 8;
-  // a guard of one plane past the end: span_velocities() may read the
-  // neighbours of ghost nodes between two fluid nodes (values unused)
-  m_f = allocate(Q * m_stride + static_cast<std::size_t>(m_pad[0]) * (m_pad[1] + 1) + 1);
+  m_f = allocate(Q * m_stride);
   for (int q = 0; q < Q; ++q) {
     m_read_normal[q] = static_cast<std::ptrdiff_t>(q * m_stride);
     m_read_swapped[q] = static_cast<std::ptrdiff_t>(opposite(q) * m_stride) - m_offset[q];
@@ -414,38 +412,6 @@ Vec3 LBFluid::velocity_at_index(std::size_t n) const {
   const double scale = m_p.agrid / m_p.tau / rho;
   return Vec3((jx + 0.5 * m_ext_lattice[0]) * scale, (jy + 0.5 * m_ext_lattice[1]) * scale,
               (jz + 0.5 * m_ext_lattice[2]) * scale);
-}
-
-void LBFluid::span_velocities(std::size_t first, int count, double* ux, double* uy,
-                              double* uz) const {
-  const std::ptrdiff_t* off = read_offset();
-  const double* p[Q];
-  for (int q = 0; q < Q; ++q)
-    p[q] = m_f + off[q] + static_cast<std::ptrdiff_t>(first);
-  const double ex = 0.5 * m_ext_lattice[0], ey = 0.5 * m_ext_lattice[1],
-               ez = 0.5 * m_ext_lattice[2];
-  const double lattice_to_md = m_p.agrid / m_p.tau;
-  // the same sums as velocity_at_index, over contiguous rows of the 19
-  // streams (solid nodes in the span give garbage, overwritten by the caller)
-#pragma GCC ivdep
-  for (int i = 0; i < count; ++i) {
-    double rho = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
-#pragma GCC unroll 19
-    for (int q = 0; q < Q; ++q) {
-      const double v = p[q][i];
-      rho += v;
-      if (c[q][0])
-        jx += c[q][0] * v;
-      if (c[q][1])
-        jy += c[q][1] * v;
-      if (c[q][2])
-        jz += c[q][2] * v;
-    }
-    const double scale = lattice_to_md / rho;
-    ux[i] = (jx + ex) * scale;
-    uy[i] = (jy + ey) * scale;
-    uz[i] = (jz + ez) * scale;
-  }
 }
 
 Vec3 LBFluid::node_velocity(const Vec3i& node) const {

@@ -141,11 +141,6 @@ public:
   std::size_t n_padded_slots() const { return m_stride; }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
   Vec3 velocity_at_index(std::size_t n) const;
-  /** Velocities (MD units) of the fluid nodes first .. first + count - 1
-   *  (padded indices, count <= 64) into ux, uy, uz, vectorised over the
-   *  span; entries of solid nodes are meaningless (see solid_at_index). */
-  void span_velocities(std::size_t first, int count, double* ux, double* uy, double* uz) const;
-  bool solid_at_index(std::size_t n) const { return m_flag[n] != 0; }
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
   /** The force field the next update applies, for bulk deposits: component d
