@@ -91,6 +91,11 @@ class FastPathMatchesGeneric(unittest.TestCase):
         self.compare(system, "mol_id changed")
         cells[0].particles.mol_id = 7  # both cells one "cell": sums over both
         self.compare(system, "two cells, one mol_id")
+        # mixed mol_ids within a cell: triangles of two "cells" share nodes
+        # (the fast global forces decline, the generic loop evaluates them)
+        n_nodes = len(cells[0].particles.id)
+        cells[0].particles.mol_id = np.where(np.arange(n_nodes) % 2 == 0, 3, 7)
+        self.compare(system, "mixed mol_ids in a cell")
         cells[0].particles.mol_id = 3
         system.part.by_id(0).remove()
         self.compare(system, "free particle removed")

@@ -83,6 +83,16 @@ inline void minimum_image_axis(double* d, int n, double L) {
   }
 }
 
+/** Whether any of n separations along one periodic axis of length L is
+ *  longer than L/2 (then minimum_image_axis is needed). */
+inline bool beyond_half(const double* d, int n, double L) {
+  const double half = 0.5 * L;
+  int beyond = 0;
+  for (int k = 0; k < n; ++k)
+    beyond |= std::abs(d[k]) > half;
+  return beyond;
+}
+
 constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
 
 /** Per-block arrays of the edge pass (structure of arrays). */
@@ -124,6 +134,44 @@ bool FastBondPlan::build_slots(const BondGroup& group, const ParticleStore& p,
     bond_slots[k] = slot_of[i];
   }
   const std::size_t n = m_index.size();
+  // frames: the connected sets of the bonds (union-find over slots), each
+  // referred to its first slot
+  std::vector<int> parent(n);
+  for (std::size_t s = 0; s < n; ++s)
+    parent[s] = static_cast<int>(s);
+  auto root = [&](int s) {
+    while (parent[s] != s)
+      s = parent[s] = parent[parent[s]];
+    return s;
+  };
+  const std::size_t stride = group.n_particles > 0 ? group.n_particles : 1;
+  for (std::size_t k = 0; k + stride <= bond_slots.size(); k += stride)
+    for (std::size_t j = 1; j < stride; ++j) {
+      const int r0 = root(bond_slots[k]), r1 = root(bond_slots[k + j]);
+      if (r0 != r1)
+        parent[std::max(r0, r1)] = std::min(r0, r1); // the root stays the first slot
+    }
+  // slots renumbered frame by frame (a frame's nodes contiguous, its
+  // reference node first; the order within a frame kept): one pass per frame
+  std::vector<int> frame_of(n), order(n), new_slot(n);
+  for (std::size_t s = 0; s < n; ++s) {
+    frame_of[s] = root(static_cast<int>(s));
+    order[s] = static_cast<int>(s);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int x, int y) { return frame_of[x] < frame_of[y]; });
+  std::vector<int> index(n);
+  m_frame_begin.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k == 0 || frame_of[order[k]] != frame_of[order[k - 1]])
+      m_frame_begin.push_back(static_cast<int>(k));
+    new_slot[order[k]] = static_cast<int>(k);
+    index[k] = m_index[order[k]];
+  }
+  m_frame_begin.push_back(static_cast<int>(n));
+  m_index.swap(index);
+  for (int& s : bond_slots)
+    s = new_slot[s];
   m_x.resize(n);
   m_v.resize(n);
   m_f.resize(n);
@@ -138,36 +186,36 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
   m_bonds.resize(n);
   m_ref.resize(n);
   // Unique triangles, keyed by their sorted slots (21 bits each). Each is
-  // evaluated by the first bond that has it (its "owner", in the owner's edge
-  // pass, from the vectors gathered there anyway) with weight = (bonds using
-  // it) / 3 and area0 = the sum of those bonds' reference areas / 3: the sum
-  // of the bonds' kal (S - S0_bond) / 3 of oif_local_forces.hpp is then
-  // kal (weight S - area0), applied once.
+  // evaluated once, by one of the bonds that have it (its "owner", in the
+  // owner's edge pass, from the vectors gathered there anyway) with weight =
+  // (bonds using it) / 3 and area0 = the sum of those bonds' reference areas
+  // / 3: the sum of the bonds' kal (S - S0_bond) / 3 of oif_local_forces.hpp
+  // is then kal (weight S - area0), applied once. Owners are chosen so that a
+  // bond owns at most one triangle (a closed mesh has 2/3 triangle per edge):
+  // each bond then evaluates one centroid allocation, not two.
   if (m_index.size() >= (std::size_t(1) << 21))
     return false;
   struct Use {
     std::size_t bond;
-    int which; // 0: triangle ABC, 1: BCD
+    int bcd; // 0: triangle ABC, 1: BCD
   };
   std::unordered_map<std::uint64_t, int> triangle_of;
   triangle_of.reserve(n);
-  std::vector<Use> owner;
-  std::vector<int> uses;
+  std::vector<std::vector<Use>> uses;
   std::vector<double> area0_sum;
-  auto add_triangle = [&](int s0, int s1, int s2, double area0, std::size_t bond, int which) {
+  auto add_triangle = [&](int s0, int s1, int s2, double area0, std::size_t bond, int bcd) {
     int lo = std::min({s0, s1, s2}), hi = std::max({s0, s1, s2});
     const int mid = s0 + s1 + s2 - lo - hi;
     const std::uint64_t key = static_cast<std::uint64_t>(lo) |
                               (static_cast<std::uint64_t>(mid) << 21) |
                               (static_cast<std::uint64_t>(hi) << 42);
-    auto [it, inserted] = triangle_of.try_emplace(key, static_cast<int>(owner.size()));
+    auto [it, inserted] = triangle_of.try_emplace(key, static_cast<int>(uses.size()));
     if (inserted) {
-      owner.push_back({bond, which});
-      uses.push_back(0);
+      uses.emplace_back();
       area0_sum.push_back(0.0);
     }
     area0_sum[it->second] += area0;
-    ++uses[it->second];
+    uses[it->second].push_back({bond, bcd});
   };
   for (std::size_t b = 0; b < n; ++b) {
     const int* s = slots.data() + 4 * b; // (B, A, C, D)
@@ -184,10 +232,55 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
     add_triangle(s[1], s[0], s[2], ref[2], b, 0); // A B C
     add_triangle(s[0], s[2], s[3], ref[3], b, 1); // B C D
   }
-  for (std::size_t t = 0; t < owner.size(); ++t) {
+  // owners: greedily the first free bond; else move the owner of one of the
+  // triangle's bonds to another free bond of its own (one augmenting step);
+  // else the triangle is an extra of its first bond
+  const std::size_t n_triangles = uses.size();
+  std::vector<int> owned(n, -1); // bond -> triangle it evaluates
+  std::vector<Use> owner(n_triangles, Use{0, -1});
+  std::vector<int> unplaced;
+  auto place = [&](int t, const Use& u) {
+    owned[u.bond] = t;
+    owner[t] = u;
+  };
+  for (std::size_t t = 0; t < n_triangles; ++t) {
+    bool done = false;
+    for (const Use& u : uses[t])
+      if (!done && owned[u.bond] < 0) {
+        place(static_cast<int>(t), u);
+        done = true;
+      }
+    if (!done)
+      unplaced.push_back(static_cast<int>(t));
+  }
+  m_extra.clear();
+  for (const int t : unplaced) {
+    bool done = false;
+    for (const Use& u : uses[t]) {
+      const int other = owned[u.bond];
+      for (const Use& v : uses[other])
+        if (!done && owned[v.bond] < 0) {
+          place(other, v);
+          place(t, u);
+          done = true;
+        }
+      if (done)
+        break;
+    }
+    if (!done) {
+      const Use& u = uses[t].front();
+      m_extra.push_back({u.bond, u.bcd, uses[t].size() / 3.0, area0_sum[t] / 3.0});
+    }
+  }
+  std::sort(m_extra.begin(), m_extra.end(),
+            [](const ExtraTriangle& x, const ExtraTriangle& y) { return x.bond < y.bond; });
+  for (std::size_t t = 0; t < n_triangles; ++t) {
+    if (owner[t].bcd < 0)
+      continue; // an extra
     const std::size_t b = owner[t].bond;
-    (owner[t].which == 0 ? m_ref.weight1 : m_ref.weight2)[b] = uses[t] / 3.0;
-    (owner[t].which == 0 ? m_ref.area0_1 : m_ref.area0_2)[b] = area0_sum[t] / 3.0;
+    m_ref.bcd[b] = owner[t].bcd;
+    m_ref.weight[b] = uses[t].size() / 3.0;
+    m_ref.area0[b] = area0_sum[t] / 3.0;
   }
   return true;
 }
@@ -216,6 +309,15 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
     }
     m_triangles[t] = {s[0], s[1], s[2], it->second};
   }
+  // each node in the triangles of one cell only (as an OifCell's): its
+  // forces are then its cell's factors times its sums (run); else decline
+  m_slot_cell.assign(m_index.size(), -1);
+  m_nodes_in_one_cell = true;
+  for (const Triangle& tr : m_triangles)
+    for (const int v : {tr.v0, tr.v1, tr.v2}) {
+      m_nodes_in_one_cell &= m_slot_cell[v] < 0 || m_slot_cell[v] == tr.cell;
+      m_slot_cell[v] = tr.cell;
+    }
   const std::size_t n_cells = m_cell_mol.size();
   // triangles grouped by cell (a cell's are contiguous when created in bulk;
   // the stable sort keeps their order): per-cell passes over a range
@@ -234,14 +336,39 @@ bool FastBondPlan::build_triangles(const BondGroup& group, const ParticleStore& 
   return true;
 }
 
-bool FastBondPlan::gather_positions_same_cells(const ParticleStore& p) {
+bool FastBondPlan::gather_relative_same_cells(const ParticleStore& p, const BoxGeometry& box) {
   int same = 1;
-  for (std::size_t s = 0; s < m_index.size(); ++s) {
-    const int i = m_index[s];
-    m_x[s] = p.pos[i];
-    same &= p.mol_id[i] == m_slot_mol[s];
-  }
+  for (std::size_t s = 0; s < m_index.size(); ++s)
+    same &= p.mol_id[m_index[s]] == m_slot_mol[s];
+  gather_relative(p, box);
   return same;
+}
+
+void FastBondPlan::gather_relative(const ParticleStore& p, const BoxGeometry& box) {
+  const Vec3& L = box.length();
+  const Vec3 half = 0.5 * L;
+  int within = 1;
+  for (std::size_t f = 0; f + 1 < m_frame_begin.size(); ++f) {
+    const int begin = m_frame_begin[f], end = m_frame_begin[f + 1];
+    const int r = m_index[begin];
+    const Vec3 pos_r = p.pos[r];
+    const Vec3i image_r = p.image[r];
+    Vec3 low = Vec3::Zero(), high = Vec3::Zero();
+    for (int s = begin; s < end; ++s) {
+      const int i = m_index[s];
+      // the image difference first (integers, exact): no growth of rounding
+      // with the number of boxes a cell has travelled
+      const Vec3 x = (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(L);
+      m_x[s] = x;
+      low = low.cwiseMin(x);
+      high = high.cwiseMax(x);
+    }
+    // within half the box on every periodic axis, all the frame's
+    // separations are their own minimum images (no check per bond)
+    for (int d = 0; d < 3; ++d)
+      within &= !box.periodic()[d] || high[d] - low[d] <= half[d];
+  }
+  m_within_half = within;
 }
 
 void FastBondPlan::gather_positions(const ParticleStore& p) {
@@ -278,7 +405,7 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
   }
   if (!m_usable)
     return false;
-  gather_positions(p);
+  gather_relative(p, box);
   if (ia.kvisc != 0.0)
     for (std::size_t s = 0; s < m_index.size(); ++s)
       m_v[s] = p.vel[m_index[s]];
@@ -293,14 +420,15 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
   const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb, kal = ia.kal;
   const bool wings = kb != 0.0 || kal != 0.0; // terms that need a and d
   EdgeBlock blk;
+  const ExtraTriangle *extra = m_extra.data(), *const extra_end = extra + m_extra.size();
   for (std::size_t first = 0; first < m_bonds.size(); first += kBlock) {
     const int nb = static_cast<int>(std::min<std::size_t>(kBlock, m_bonds.size() - first));
     const EdgeBond* bond = m_bonds.data() + first;
     const double *r0 = m_ref.r0.data() + first, *inv_r0 = m_ref.inv_r0.data() + first;
     const double *cos_psi0 = m_ref.cos_psi0.data() + first,
                  *sin_psi0 = m_ref.sin_psi0.data() + first;
-    const double *weight1 = m_ref.weight1.data() + first, *area0_1 = m_ref.area0_1.data() + first;
-    const double *weight2 = m_ref.weight2.data() + first, *area0_2 = m_ref.area0_2.data() + first;
+    const double *bcd = m_ref.bcd.data() + first, *weight = m_ref.weight.data() + first,
+                 *area0 = m_ref.area0.data() + first;
     for (int k = 0; k < nb; ++k) {
       const EdgeBond& bd = bond[k];
       const Vec3& xb = m_x[bd.b];
@@ -321,12 +449,18 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
           blk.dv[d][k] = dv[d];
       }
     }
+    // separations of the frame; a cell wider than half the box (unusual)
+    // needs the minimum image of the generic loop
     for (int d = 0; d < 3; ++d)
-      if (box.periodic()[d]) {
-        minimum_image_axis(blk.e[d], nb, box.length()[d]);
+      if (!m_within_half && box.periodic()[d]) {
+        const double L = box.length()[d];
+        if (beyond_half(blk.e[d], nb, L))
+          minimum_image_axis(blk.e[d], nb, L);
         if (wings) {
-          minimum_image_axis(blk.u[d], nb, box.length()[d]);
-          minimum_image_axis(blk.w[d], nb, box.length()[d]);
+          if (beyond_half(blk.u[d], nb, L))
+            minimum_image_axis(blk.u[d], nb, L);
+          if (beyond_half(blk.w[d], nb, L))
+            minimum_image_axis(blk.w[d], nb, L);
         }
       }
     int bad = 0;
@@ -438,10 +572,39 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
     }
 
     if (kal != 0.0) {
-      // local area (eq. 5) of the triangles this bond owns (weight 0 else),
-      // centroid allocation (oif_area.hpp); vertices relative to b:
-      // ABC = (u, 0, e), BCD = (0, e, w)
+      // local area (eq. 5) of the triangle this bond owns (weight 0 else),
+      // centroid allocation (oif_area.hpp). Both triangles have b, the
+      // frame's zero, as a vertex: the triangle is (0, P, Q) with ABC: P = u
+      // (a), Q = e (c); BCD: P = e (c), Q = w (d), chosen by factors 0/1
+      // (exact), branch-free. Centroid T = (P + Q)/3; vertex i gets
+      // scale (T - p_i), scale = kal (weight S - area0) / sum_i |T - p_i|^2.
+      constexpr double third = 1.0 / 3.0;
       for (int k = 0; k < nb; ++k) {
+        const double s1 = bcd[k], s0 = 1.0 - s1;
+        double t[3], mp[3], mq[3];
+        for (int d = 0; d < 3; ++d) {
+          const double pd = s0 * blk.u[d][k] + s1 * blk.e[d][k];
+          const double qd = s0 * blk.e[d][k] + s1 * blk.w[d][k];
+          t[d] = (pd + qd) * third;
+          mp[d] = t[d] - pd;
+          mq[d] = t[d] - qd;
+        }
+        const double norm2 = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]) +
+                             (mp[0] * mp[0] + mp[1] * mp[1] + mp[2] * mp[2]) +
+                             (mq[0] * mq[0] + mq[1] * mq[1] + mq[2] * mq[2]);
+        const double area = 0.5 * std::sqrt(s0 * blk.n1_2[k] + s1 * blk.n2_2[k]);
+        const double scale = kal * (weight[k] * area - area0[k]) / norm2;
+        for (int d = 0; d < 3; ++d) {
+          const double fp = scale * mp[d], fq = scale * mq[d];
+          blk.fb[d][k] += scale * t[d];
+          blk.fa[d][k] += s0 * fp;
+          blk.fc[d][k] += s0 * fq + s1 * fp;
+          blk.fd[d][k] += s1 * fq;
+        }
+      }
+      // triangles that no bond could own alone (none on closed meshes seen)
+      for (; extra != extra_end && extra->bond < first + nb; ++extra) {
+        const int k = static_cast<int>(extra->bond - first);
         const double e[3] = {blk.e[0][k], blk.e[1][k], blk.e[2][k]};
         const double u[3] = {blk.u[0][k], blk.u[1][k], blk.u[2][k]};
         const double w[3] = {blk.w[0][k], blk.w[1][k], blk.w[2][k]};
@@ -450,10 +613,12 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
         double* fb[3] = {&blk.fb[0][k], &blk.fb[1][k], &blk.fb[2][k]};
         double* fc[3] = {&blk.fc[0][k], &blk.fc[1][k], &blk.fc[2][k]};
         double* fd[3] = {&blk.fd[0][k], &blk.fd[1][k], &blk.fd[2][k]};
-        centroid_area_force(u, zero, e, 0.5 * std::sqrt(blk.n1_2[k]), weight1[k], area0_1[k], kal,
-                            fa, fb, fc);
-        centroid_area_force(zero, e, w, 0.5 * std::sqrt(blk.n2_2[k]), weight2[k], area0_2[k], kal,
-                            fb, fc, fd);
+        if (extra->bcd == 0)
+          centroid_area_force(u, zero, e, 0.5 * std::sqrt(blk.n1_2[k]), extra->weight, extra->area0,
+                              kal, fa, fb, fc);
+        else
+          centroid_area_force(zero, e, w, 0.5 * std::sqrt(blk.n2_2[k]), extra->weight, extra->area0,
+                              kal, fb, fc, fd);
       }
     }
 
@@ -484,21 +649,31 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
   m_normals_written = false;
   if (!m_usable)
     return false;
-  if (!gather_positions_same_cells(p)) { // a mol_id changed: the cells regroup
+  if (!gather_relative_same_cells(p, box)) { // a mol_id changed: the cells regroup
     m_usable = build_triangles(group, p);
     ++m_n_builds;
     if (!m_usable)
       return false;
-    gather_positions(p);
+    gather_relative(p, box);
   }
+  if (!m_nodes_in_one_cell)
+    return false;
+  // One pass over each cell's triangles: per node, the sums that its forces
+  // are the cell's factors times (eqs. 6, 7 need the cell's totals first):
+  //   global area (centroid allocation, oif_area.hpp): vertex i of triangle
+  //     t gets kag (S - S0)/S0 S_t (T - p_i) / sum_j |T - p_j|^2: sum over t
+  //     of g_t (T - p_i), g_t = S_t / sum_j |T - p_j|^2, in m_f;
+  //   volume (oif_volume.hpp): each vertex gets -kv (|V| - V0)/V0 s N_t / 6:
+  //     sum of N_t = (b - a) x (c - a) over t, in m_normal (whose direction
+  //     is also the node's normal of OifOutDirection).
   for (Vec3& f : m_f)
     f.setZero();
-  if (write_normals)
-    m_normal.assign(m_index.size(), Vec3::Zero());
+  m_normal.assign(m_index.size(), Vec3::Zero());
+  m_cell_area_factor.resize(m_cell_mol.size());
+  m_cell_volume_factor.resize(m_cell_mol.size());
+  m_cell_sign.resize(m_cell_mol.size());
   const double ka_g = ia.ka_g, kv = ia.kv, A0_g = ia.A0_g, V0 = ia.V0;
-  // Cell by cell: its triangles' edges and first vertices gathered, then
-  // normals, areas and volumes over plain arrays (vectorised), the cell's sums,
-  // then the forces of eqs. 6 and 7 (vectorised), then scattered.
+  constexpr double third = 1.0 / 3.0;
   for (std::size_t cell = 0; cell < m_cell_mol.size(); ++cell) {
     const std::size_t begin = m_cell_begin[cell];
     const int n = static_cast<int>(m_cell_begin[cell + 1] - begin);
@@ -509,35 +684,54 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     double *e1x = arr(0), *e1y = arr(1), *e1z = arr(2), *e2x = arr(3), *e2y = arr(4), *e2z = arr(5),
            *nx = arr(6), *ny = arr(7), *nz = arr(8), *area = arr(9), *vol = arr(10), *ax = arr(11),
            *ay = arr(12), *az = arr(13);
-    double *f0x = arr(14), *f0y = arr(15), *f0z = arr(16), *f1x = arr(17), *f1y = arr(18),
-           *f1z = arr(19), *f2x = arr(20), *f2y = arr(21), *f2z = arr(22);
-    const int ref = m_index[m_cell_reference[cell]];
-    const Vec3 origin = box.unfolded(p.pos[ref], p.image[ref]);
+    double *g0x = arr(14), *g0y = arr(15), *g0z = arr(16), *g1x = arr(17), *g1y = arr(18),
+           *g1z = arr(19), *g2x = arr(20), *g2y = arr(21), *g2z = arr(22);
+    // m_x: unfolded, relative to the frame's reference node (gather_relative)
+    const Vec3 origin = m_x[m_cell_reference[cell]];
     for (int k = 0; k < n; ++k) {
       const Vec3& x0 = m_x[tri[k].v0];
-      const Vec3 e1 = m_x[tri[k].v1] - x0; // minimum image below
+      const Vec3 e1 = m_x[tri[k].v1] - x0; // minimum image below if needed
       const Vec3 e2 = m_x[tri[k].v2] - x0;
       // first vertex relative to the cell's reference point, unfolded
       // (oif_cell_sums.hpp): a . (b x c) = a . N with N = (b - a) x (c - a)
-      const Vec3 a = box.unfolded(x0, p.image[m_index[tri[k].v0]]) - origin;
+      const Vec3 a = x0 - origin;
       e1x[k] = e1[0], e1y[k] = e1[1], e1z[k] = e1[2];
       e2x[k] = e2[0], e2y[k] = e2[1], e2z[k] = e2[2];
       ax[k] = a[0], ay[k] = a[1], az[k] = a[2];
     }
     for (int d = 0; d < 3; ++d)
-      if (box.periodic()[d]) {
-        minimum_image_axis(arr(d), n, box.length()[d]);     // e1
-        minimum_image_axis(arr(3 + d), n, box.length()[d]); // e2
+      if (!m_within_half && box.periodic()[d]) {
+        const double L = box.length()[d];
+        for (int which : {d, 3 + d}) // e1, e2
+          if (beyond_half(arr(which), n, L))
+            minimum_image_axis(arr(which), n, L);
       }
+    int bad = 0;
     PYOIF_INDEPENDENT_ITERATIONS
     for (int k = 0; k < n; ++k) {
-      const double x = e1y[k] * e2z[k] - e1z[k] * e2y[k];
-      const double y = e1z[k] * e2x[k] - e1x[k] * e2z[k];
-      const double z = e1x[k] * e2y[k] - e1y[k] * e2x[k];
+      const double e1x_ = e1x[k], e1y_ = e1y[k], e1z_ = e1z[k];
+      const double e2x_ = e2x[k], e2y_ = e2y[k], e2z_ = e2z[k];
+      const double x = e1y_ * e2z_ - e1z_ * e2y_;
+      const double y = e1z_ * e2x_ - e1x_ * e2z_;
+      const double z = e1x_ * e2y_ - e1y_ * e2x_;
       nx[k] = x, ny[k] = y, nz[k] = z;
-      area[k] = 0.5 * std::sqrt(x * x + y * y + z * z);
+      const double s = 0.5 * std::sqrt(x * x + y * y + z * z);
+      bad |= !(s > 0.0);
+      area[k] = s;
       vol[k] = ax[k] * x + ay[k] * y + az[k] * z;
+      // centroid relative to the first vertex: T - p0 = (e1 + e2)/3
+      const double m0x = (e1x_ + e2x_) * third, m0y = (e1y_ + e2y_) * third,
+                   m0z = (e1z_ + e2z_) * third;
+      const double m1x = m0x - e1x_, m1y = m0y - e1y_, m1z = m0z - e1z_;
+      const double m2x = m0x - e2x_, m2y = m0y - e2y_, m2z = m0z - e2z_;
+      const double g = s / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y + m1z * m1z +
+                            m2x * m2x + m2y * m2y + m2z * m2z);
+      g0x[k] = g * m0x, g0y[k] = g * m0y, g0z[k] = g * m0z;
+      g1x[k] = g * m1x, g1y[k] = g * m1y, g1z[k] = g * m1z;
+      g2x[k] = g * m2x, g2y[k] = g * m2y, g2z[k] = g * m2z;
     }
+    if (bad)
+      return false;
     // four partial sums: no loop-carried chain of additions
     double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
     int k = 0;
@@ -554,51 +748,34 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     const double cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
     if (!(cell_area > 0.0))
       return false;
-    // volume (eq. 7, oif_volume.hpp): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
+    // volume (eq. 7): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
     const double sign = cell_volume < 0.0 ? -1.0 : 1.0;
-    const double volume_factor =
+    m_cell_volume_factor[cell] =
         kv != 0.0 ? -kv * ((sign * cell_volume - V0) / V0) * sign / 6.0 : 0.0;
-    // global area (eq. 6): centroid allocation with kag (S - S0) S_t / S0
-    const double area_factor = ka_g != 0.0 ? ka_g * (cell_area - A0_g) / A0_g : 0.0;
-    int bad = 0;
-    PYOIF_INDEPENDENT_ITERATIONS
+    // global area (eq. 6): kag (S - S0) / S0 times the sums of g_t (T - p_i)
+    m_cell_area_factor[cell] = ka_g != 0.0 ? ka_g * (cell_area - A0_g) / A0_g : 0.0;
+    m_cell_sign[cell] = sign;
     for (int q = 0; q < n; ++q) {
-      bad |= !(area[q] > 0.0);
-      const double ax_ = e1x[q], ay_ = e1y[q], az_ = e1z[q];
-      const double bx = e2x[q], by = e2y[q], bz = e2z[q];
-      const double max_ = (ax_ + bx) / 3.0, may = (ay_ + by) / 3.0, maz = (az_ + bz) / 3.0;
-      const double mbx = max_ - ax_, mby = may - ay_, mbz = maz - az_;
-      const double mcx = max_ - bx, mcy = may - by, mcz = maz - bz;
-      const double scale = area_factor * area[q] /
-                           (max_ * max_ + may * may + maz * maz + mbx * mbx + mby * mby +
-                            mbz * mbz + mcx * mcx + mcy * mcy + mcz * mcz);
-      const double vx = volume_factor * nx[q], vy = volume_factor * ny[q],
-                   vz = volume_factor * nz[q];
-      f0x[q] = scale * max_ + vx, f0y[q] = scale * may + vy, f0z[q] = scale * maz + vz;
-      f1x[q] = scale * mbx + vx, f1y[q] = scale * mby + vy, f1z[q] = scale * mbz + vz;
-      f2x[q] = scale * mcx + vx, f2y[q] = scale * mcy + vy, f2z[q] = scale * mcz + vz;
+      const Vec3 nq(nx[q], ny[q], nz[q]);
+      m_f[tri[q].v0] += Vec3(g0x[q], g0y[q], g0z[q]);
+      m_normal[tri[q].v0] += nq;
+      m_f[tri[q].v1] += Vec3(g1x[q], g1y[q], g1z[q]);
+      m_normal[tri[q].v1] += nq;
+      m_f[tri[q].v2] += Vec3(g2x[q], g2y[q], g2z[q]);
+      m_normal[tri[q].v2] += nq;
     }
-    if (bad)
-      return false;
-    for (int q = 0; q < n; ++q) {
-      m_f[tri[q].v0] += Vec3(f0x[q], f0y[q], f0z[q]);
-      m_f[tri[q].v1] += Vec3(f1x[q], f1y[q], f1z[q]);
-      m_f[tri[q].v2] += Vec3(f2x[q], f2y[q], f2z[q]);
-    }
-    if (write_normals) // OifOutDirection's area-weighted normals, outward by the volume's sign
-      for (int q = 0; q < n; ++q) {
-        const Vec3 nq = sign * Vec3(nx[q], ny[q], nz[q]);
-        m_normal[tri[q].v0] += nq;
-        m_normal[tri[q].v1] += nq;
-        m_normal[tri[q].v2] += nq;
-      }
+  }
+  for (std::size_t s = 0; s < m_index.size(); ++s) {
+    const int c = m_slot_cell[s];
+    m_f[s] = m_cell_area_factor[c] * m_f[s] + m_cell_volume_factor[c] * m_normal[s];
   }
   if (!commit_forces(p))
     return false;
-  if (write_normals) {
+  if (write_normals) { // OifOutDirection's area-weighted normals, outward by the volume's sign
     for (std::size_t s = 0; s < m_index.size(); ++s) {
       const double len = m_normal[s].norm();
-      p.normal[m_index[s]] = len > 0.0 ? Vec3(m_normal[s] / len) : m_normal[s];
+      const Vec3 nq = m_cell_sign[m_slot_cell[s]] * m_normal[s];
+      p.normal[m_index[s]] = len > 0.0 ? Vec3(nq / len) : nq;
     }
     m_normals_written = true;
   }

@@ -6,24 +6,33 @@
 // Derived once per set of bonds and particles (rebuilt when the particle
 // store's layout version, the bonds or, for the global forces, a node's mol_id
 // change): the local particle index of every node the group touches (compact
-// "slots", so a step does no id -> index lookups), each bond as four slots with
-// its reference values as arrays, the unique triangles, and the cells. Each
-// pass works in blocks: gather the separations (indexed loads), minimum image
-// and all arithmetic as loops over plain arrays (vectorised), scatter the
-// forces to the slots. Per step:
+// "slots", so a step does no id -> index lookups), grouped in frames (the
+// connected sets of bonds: cells), each bond as four slots with its reference
+// values as arrays, the unique triangles, and the cells. Per step the nodes
+// are gathered once, frame by frame, as unfolded positions relative to the
+// frame's first node: separations need no minimum image per bond while every
+// frame spans at most half the box (checked per step; else the minimum image
+// of the generic loop per block), the volume no unfolding per triangle. Each
+// pass works in blocks: gather the separations (indexed loads), all
+// arithmetic as loops over plain arrays (vectorised), scatter the forces to
+// the slots. Per step:
 //  - OifLocalForces: one pass over the edges: stretching (eq. 3), viscosity,
 //    bending (eq. 4) -- the deviation from the relaxed angle taken as one
 //    angle, its sine from (n1 x n2).e = |e|^2 n1.(d - b), a polynomial
 //    arctangent below 14 degrees, std::atan2 above -- and the local area
-//    (eq. 5) of each unique triangle once, in the first bond that has it,
+//    (eq. 5) of each unique triangle once, by an owner bond that owns no
+//    other (a matching; leftovers, e.g. on open strips, in a scalar loop),
 //    with the mean of its bonds' reference areas (the generic loop applies
 //    1/3 in each of its three bonds). No energies (the time-step loop never
 //    reads them).
-//  - OifGlobalForces, cell by cell: the triangles' normals, the cell's area
+//  - OifGlobalForces, one pass over each cell's triangles: the cell's area
 //    and volume (eqs. 6, 7; volume as sum a.N/6, N = (b-a)x(c-a), a the first
-//    vertex relative to the cell's reference point, unfolded), the forces;
-//    and the node normals of an OifOutDirection group over the same triangles
-//    (write_normals), which then needs no pass of its own.
+//    vertex relative to the cell's reference point, unfolded) and per node
+//    the sums its forces are the cell's factors times (sum of g_t (T - p_i)
+//    for the area, sum of N_t for the volume); the node normals of an
+//    OifOutDirection group over the same triangles (write_normals) are the
+//    directions of the latter, so that group needs no pass of its own.
+//    Declines (generic loop) when a node is in triangles of two cells.
 //  - OifOutDirection otherwise: one pass over the triangles for the normals.
 // Forces are accumulated per slot and added to the particles only when the
 // whole group succeeded: on a degenerate or broken bond (or any non-finite
@@ -90,15 +99,22 @@ private:
   };
   /** Per-bond reference values, one array each (vectorised loops): relaxed
    *  length, the relaxed dihedral as psi0 = pi - phi0, and the local area
-   *  terms of the triangles ABC (1) and BCD (2) where the bond owns them
-   *  (weight 0 otherwise; see build_local). */
+   *  term of the one triangle the bond evaluates: bcd 0 for ABC, 1 for BCD
+   *  (weight 0 where it owns none; see build_local). */
   struct EdgeReferences {
     std::vector<double> r0, inv_r0, cos_psi0, sin_psi0;
-    std::vector<double> weight1, area0_1, weight2, area0_2;
+    std::vector<double> bcd, weight, area0;
     void resize(std::size_t n) {
-      for (auto* v : {&r0, &inv_r0, &cos_psi0, &sin_psi0, &weight1, &area0_1, &weight2, &area0_2})
+      for (auto* v : {&r0, &inv_r0, &cos_psi0, &sin_psi0, &bcd, &weight, &area0})
         v->assign(n, 0.0);
     }
+  };
+  /** A triangle whose bonds all own another one (rare; none on the meshes
+   *  seen): evaluated by its bond in a scalar loop. */
+  struct ExtraTriangle {
+    std::size_t bond;
+    int bcd; ///< 0: ABC, 1: BCD
+    double weight, area0;
   };
   /** One triangle of a triangle group (OifGlobalForces, OifOutDirection) as
    *  slots, with its cell. */
@@ -120,13 +136,20 @@ private:
   };
   Key key_of(const BondGroup& group, const ParticleStore& p, int kind) const;
 
-  /** Slots of the group's particles; false when a particle is missing. */
+  /** Slots of the group's particles; false when a particle is missing. Also
+   *  the frames: the connected sets of bonds (cells), their slots contiguous,
+   *  the first one the frame's reference node. */
   bool build_slots(const BondGroup& group, const ParticleStore& p, std::vector<int>& bond_slots);
   bool build_local(const BondGroup& group, const ParticleStore& p);
   bool build_triangles(const BondGroup& group, const ParticleStore& p);
-  /** gather_positions(), and whether every node still has the mol_id of the
+  /** gather_relative(), and whether every node still has the mol_id of the
    *  build (the cells of a triangle group are mol_ids). */
-  bool gather_positions_same_cells(const ParticleStore& p);
+  bool gather_relative_same_cells(const ParticleStore& p, const BoxGeometry& box);
+  /** m_x = each node's unfolded position relative to its frame's reference
+   *  node, (x - x_ref) + (image - image_ref) L: a cell's separations without
+   *  a minimum image per bond, its volume without unfolding per triangle. */
+  void gather_relative(const ParticleStore& p, const BoxGeometry& box);
+  /** m_x = folded positions (OifOutDirection). */
   void gather_positions(const ParticleStore& p);
   /** Adds the slot forces to the particles if all are finite. */
   bool commit_forces(ParticleStore& p) const;
@@ -149,18 +172,24 @@ private:
   bool m_usable = false; ///< false: the group cannot use the fast path (generic loop)
   std::size_t m_n_builds = 0;
 
-  std::vector<int> m_index; ///< slot -> local particle index
-  std::vector<Vec3> m_x;    ///< slot -> folded position of this step
-  std::vector<Vec3> m_v;    ///< slot -> velocity (membrane viscosity only)
-  std::vector<Vec3> m_f;    ///< slot -> force (or normal) accumulated this step
+  std::vector<int> m_index;       ///< slot -> local particle index
+  std::vector<int> m_frame_begin; ///< frame -> its first slot (its reference node)
+  std::vector<Vec3> m_x;          ///< slot -> position of this step (see gather_*)
+  bool m_within_half = false;     ///< every frame within half the box (gather_relative)
+  std::vector<Vec3> m_v;          ///< slot -> velocity (membrane viscosity only)
+  std::vector<Vec3> m_f;          ///< slot -> force (or normal) accumulated this step
   std::vector<EdgeBond> m_bonds;
   EdgeReferences m_ref;
+  std::vector<ExtraTriangle> m_extra; ///< sorted by bond
   std::vector<Triangle> m_triangles;
 
   // cells of a triangle group (OifGlobalForces, OifOutDirection)
-  std::vector<int> m_cell_mol;           ///< cell -> mol_id
-  std::vector<int> m_cell_reference;     ///< cell -> slot of its reference node
-  std::vector<int> m_slot_mol;           ///< slot -> mol_id at build
+  std::vector<int> m_cell_mol;       ///< cell -> mol_id
+  std::vector<int> m_cell_reference; ///< cell -> slot of its reference node
+  std::vector<int> m_slot_mol;       ///< slot -> mol_id at build
+  std::vector<int> m_slot_cell;      ///< slot -> its (last) cell
+  bool m_nodes_in_one_cell = true;   ///< every node in one cell's triangles only
+  std::vector<double> m_cell_area_factor, m_cell_volume_factor, m_cell_sign; ///< this step
   std::vector<std::size_t> m_cell_begin; ///< cell -> first triangle (triangles sorted by cell)
   std::vector<Vec3> m_cell_origin;       ///< unfolded reference point of this step
   static constexpr int kCellArrays = 23; ///< per-triangle arrays of one cell's pass
