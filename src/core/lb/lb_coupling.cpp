@@ -75,7 +75,16 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                       const CouplingParams& params, std::uint64_t step, double time_step) {
   if (params.gamma <= 0.0)
     return;
-  const auto field = fluid.impulse_field();
+  // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
+  // repeated computation for the same step deposits F dt / 2 after taking
+  // back the in-flight half of the previous computation of this step
+  auto& ledger = fluid.coupling_ledger();
+  const bool same_step = ledger.any && ledger.step == step;
+  const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
+  // the force field is switched on (and read by the next update) only when
+  // something is deposited: a fluid without particles keeps the plain kernel
+  const bool deposits = particles.n_local() > 0 || (same_step && !ledger.last_position.empty());
+  double* const field = deposits ? fluid.impulse_field() : nullptr;
   const double scale = fluid.impulse_scale();
   auto deposit = [&](const Stencil& s, const Vec3& impulse) {
     const Vec3 p = scale * impulse;
@@ -87,12 +96,6 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       g[2] += wgt * p[2];
     }
   };
-  // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
-  // repeated computation for the same step deposits F dt / 2 after taking
-  // back the in-flight half of the previous computation of this step
-  auto& ledger = fluid.coupling_ledger();
-  const bool same_step = ledger.any && ledger.step == step;
-  const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
   if (same_step)
     for (std::size_t i = 0; i < ledger.last_position.size(); ++i)
       deposit(stencil(fluid, ledger.last_position[i]), -0.5 * ledger.last_impulse[i]);

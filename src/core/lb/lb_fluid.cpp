@@ -365,15 +365,25 @@ std::size_t LBFluid::padded_index(int i, int j, int k) const {
 }
 
 void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
-  rho = 0.0;
-  j.setZero();
+  // also the coupling's hot path (velocity_at_index): the 19 loads with the
+  // layout's offsets, the velocity components known at compile time after
+  // unrolling, so the zero ones drop out
   const std::ptrdiff_t* off = read_offset();
+  const double* f = m_f + n;
+  double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
+#pragma GCC unroll 19
   for (int q = 0; q < Q; ++q) {
-    const double f = m_f[off[q] + static_cast<std::ptrdiff_t>(n)];
-    rho += f;
-    for (int d = 0; d < 3; ++d)
-      j[d] += c[q][d] * f;
+    const double v = f[off[q]];
+    r += v;
+    if (c[q][0])
+      jx += c[q][0] * v;
+    if (c[q][1])
+      jy += c[q][1] * v;
+    if (c[q][2])
+      jz += c[q][2] * v;
   }
+  rho = r;
+  j = Vec3(jx, jy, jz);
 }
 
 int LBFluid::node_boundary(const Vec3i& node) const {
@@ -393,25 +403,12 @@ double LBFluid::node_density(const Vec3i& node) const {
 Vec3 LBFluid::velocity_at_index(std::size_t n) const {
   if (m_flag[n])
     return m_boundaries[m_flag[n] - 1].velocity;
-  // the coupling's hot path: the 19 loads with the layout's offsets, the
-  // velocity components known at compile time after unrolling
-  const std::ptrdiff_t* off = read_offset();
-  const double* f = m_f + n;
-  double rho = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
-#pragma GCC unroll 19
-  for (int q = 0; q < Q; ++q) {
-    const double v = f[off[q]];
-    rho += v;
-    if (c[q][0])
-      jx += c[q][0] * v;
-    if (c[q][1])
-      jy += c[q][1] * v;
-    if (c[q][2])
-      jz += c[q][2] * v;
-  }
+  double rho;
+  Vec3 j;
+  moments(n, rho, j);
   const double scale = m_p.agrid / m_p.tau / rho;
-  return Vec3((jx + 0.5 * m_ext_lattice[0]) * scale, (jy + 0.5 * m_ext_lattice[1]) * scale,
-              (jz + 0.5 * m_ext_lattice[2]) * scale);
+  return Vec3((j[0] + 0.5 * m_ext_lattice[0]) * scale, (j[1] + 0.5 * m_ext_lattice[1]) * scale,
+              (j[2] + 0.5 * m_ext_lattice[2]) * scale);
 }
 
 Vec3 LBFluid::node_velocity(const Vec3i& node) const {

@@ -215,15 +215,15 @@ private:
     std::size_t node = 0;
     double rho = 0.0, speed = 0.0;
   };
-  /** Offset into m_f of the pre-collision population q of padded node n
-   *  (fluid node, or a domain node of any kind in the normal state). */
-  /** read_offset()[q] + n: where population_slot(q, n) is, for the current layout. */
+  /** Per population q, the offset that locates it in the current layout
+   *  (normal: q * stride; swapped: -q * stride - c_q), see population_slot. */
   const std::ptrdiff_t* read_offset() const {
     return m_swapped ? m_read_swapped.data() : m_read_normal.data();
   }
+  /** Offset into m_f of the pre-collision population q of padded node n
+   *  (fluid node, or a domain node of any kind in the normal state). */
   std::size_t population_slot(int q, std::size_t n) const {
-    return m_swapped ? static_cast<std::size_t>(d3q19::opposite(q)) * m_stride + n - m_offset[q]
-                     : static_cast<std::size_t>(q) * m_stride + n;
+    return static_cast<std::size_t>(read_offset()[q] + static_cast<std::ptrdiff_t>(n));
   }
   /** Rewrites a swapped lattice in the normal layout (rare: geometry changes). */
   void normalize_layout();

@@ -181,15 +181,12 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   // AA pattern (see lb_fluid.hpp): population q of node n is read at
   // f[read[q] + n] and its post-collision value written to f[write[q] + n];
   // within one update each node reads and writes the same 19 places
-  // (write[q] = read[-q]), so the update is in place and race-free.
-  const std::size_t S = m_stride;
-  std::ptrdiff_t read[Q], write[Q];
-  for (int q = 0; q < Q; ++q) {
-    const std::ptrdiff_t own = static_cast<std::ptrdiff_t>(q * S);
-    const std::ptrdiff_t opp = static_cast<std::ptrdiff_t>(opposite(q) * S);
-    read[q] = even ? own : opp - m_offset[q];
-    write[q] = even ? opp : own + m_offset[q];
-  }
+  // (write[q] = read[-q]), so the update is in place and race-free. The read
+  // places are those of the layout the update starts from (read_offset()).
+  const std::ptrdiff_t* const read = even ? m_read_normal.data() : m_read_swapped.data();
+  std::ptrdiff_t write[Q];
+  for (int q = 0; q < Q; ++q)
+    write[q] = read[opposite(q)];
   const Relaxation l = m_relax;
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
   // the coupling's force field is read once and cleared in the same pass
