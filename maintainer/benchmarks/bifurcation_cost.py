@@ -14,12 +14,13 @@ Each figure is the CPU time of the sample run for --steps + 20 steps minus
 that of a run for 20 steps (so the set-up, seeding and output cancel).
 """
 import argparse
-import csv
 import os
 import resource
 import subprocess
 import sys
 import tempfile
+
+from benchmark_csv import write_rows
 
 PAPER_ONE_CORE = {0: 48.14, 40: 145.00}  # s per 1000 steps, Table 1
 STEPS_138_MS = 1_380_000
@@ -56,11 +57,7 @@ def main():
                   + f"; 138 ms of flow: {hours:.1f} h on one core (paper: 16 h on 6 cores = 96 core-hours)")
             rows.append({"rbcs": n, "cpu_s_per_1000_steps": s1000, "paper_one_core_s": paper or "",
                          "hours_for_138_ms_one_core": hours})
-    with open(args.csv, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    print(f"written {args.csv}")
+    write_rows(args.csv, rows)
 
 
 if __name__ == "__main__":

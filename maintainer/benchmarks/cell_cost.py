@@ -22,7 +22,6 @@ under perf, e.g.
     perf report -i cell_cost.perf --no-children --percent-limit 2
 """
 import argparse
-import csv
 import os
 import time
 
@@ -31,6 +30,8 @@ import numpy as np
 import lbmd
 import oif
 from lbmd import lb, lbboundaries, shapes
+
+from benchmark_csv import write_rows
 
 BOX = (100.0, 40.0, 20.0)
 MODULI = dict(ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
@@ -116,11 +117,7 @@ def main():
               + (f", extra per cell {extra:.4f} CPU s / 1000 steps ({extra:.4f} ms per step)" if n else ""))
     rows.append({"cells": "create_one_cell_s", "fluid": "", "s_per_1000_steps": t_create,
                  "extra_s_per_cell_per_1000_steps": "", "wall_s_per_1000_steps": ""})
-    with open(args.csv, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    print(f"written {args.csv}")
+    write_rows(args.csv, rows)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ stores allocate lines moves 24, which is why a kernel that does not can
 exceed 100 % of this roofline.
 """
 import argparse
-import csv
 import os
 import subprocess
 import time
@@ -30,6 +29,8 @@ import numpy as np
 
 import lbmd
 from lbmd import _lbmd, lb, lbboundaries, shapes
+
+from benchmark_csv import write_rows
 
 BYTES_PER_NODE = 2 * 19 * 8
 
@@ -105,12 +106,7 @@ def main():
                              mlups=m, copy_GBs=bw / 1e9, roofline_mlups=roof, fraction=m / roof))
             system.actors.clear()
             del fluid, system
-    if args.csv:
-        with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
-        print(f"\nwrote {os.path.abspath(args.csv)}")
+    write_rows(args.csv, rows)
 
 
 if __name__ == "__main__":
