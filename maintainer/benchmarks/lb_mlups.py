@@ -21,7 +21,6 @@ stores allocate lines moves 24, which is why a kernel that does not can
 exceed 100 % of this roofline.
 """
 import argparse
-import os
 import subprocess
 import time
 
