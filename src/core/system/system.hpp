@@ -108,6 +108,9 @@ private:
   void add_constraint_forces(Energies* e);
   void add_langevin_forces();
   std::vector<oif::FastBondPlan> m_fast_plans;  ///< per bonded interaction id
+  /** Per OifLocalForces id: that group fused with its cell type's
+   *  OifGlobalForces group (add_bonded_forces). */
+  std::vector<oif::FusedMembranePlan> m_fused_plans;
   double m_time_step = 0.01;
   bool m_forces_valid = false;
   int m_lb_substep = 0;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 
 // The per-cell arrays of the triangle passes are disjoint slices of one
 // buffer: tell the compiler their iterations are independent (vectorise).
@@ -104,36 +105,156 @@ struct EdgeBlock {
   double fa[3][kBlock], fb[3][kBlock], fc[3][kBlock], fd[3][kBlock];
 };
 
-} // namespace
+/** Stretching (eq. 3), membrane viscosity and bending (eq. 4) of the nb
+ *  edges whose separations (e, and u, w with wings, dv with kvisc) are in
+ *  blk: sets the forces fa..fd (fa, fd zero without wings) and, with wings,
+ *  the wing normals n1, n2 and their squared lengths. False on a zero-length
+ *  edge or (wings) a degenerate wing triangle: the generic loop must speak. */
+bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* inv_r0,
+                       const double* cos_psi0, const double* sin_psi0, const OifLocalForces& ia,
+                       bool wings) {
+  const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
+  int bad = 0;
+  for (int k = 0; k < nb; ++k) {
+    const double l2 =
+        blk.e[0][k] * blk.e[0][k] + blk.e[1][k] * blk.e[1][k] + blk.e[2][k] * blk.e[2][k];
+    bad |= !(l2 > 0.0);
+    blk.l[k] = std::sqrt(l2);
+    blk.inv_l2[k] = 1.0 / l2;
+  }
+  if (bad)
+    return false;
 
-FastBondPlan::Key FastBondPlan::key_of(const BondGroup& group, const ParticleStore& p,
-                                       int kind) const {
-  Key k;
-  k.particles_version = p.layout_version;
-  k.ids = group.ids.data();
-  k.per_bond = group.per_bond.data();
-  k.n_ids = group.ids.size();
-  k.n_per_bond = group.per_bond.size();
-  k.kind = kind;
-  return k;
+  // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
+  for (int k = 0; k < nb; ++k)
+    blk.coefficient[k] = 0.0;
+  if (ks != 0.0)
+    for (int k = 0; k < nb; ++k) {
+      const double l = blk.l[k];
+      blk.coefficient[k] +=
+          ks * neo_hookean_kappa(l * inv_r0[k]) * (l - r0[k]) * l * blk.inv_l2[k]; // (l - l0) / l
+    }
+  if (kslin != 0.0)
+    for (int k = 0; k < nb; ++k)
+      blk.coefficient[k] += kslin * (blk.l[k] - r0[k]) * blk.l[k] * blk.inv_l2[k];
+  if (kvisc != 0.0)
+    for (int k = 0; k < nb; ++k)
+      blk.coefficient[k] +=
+          kvisc *
+          (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] + blk.dv[2][k] * blk.e[2][k]) *
+          blk.inv_l2[k];
+  for (int k = 0; k < nb; ++k)
+    for (int d = 0; d < 3; ++d) {
+      const double fe = blk.coefficient[k] * blk.e[d][k];
+      blk.fa[d][k] = 0.0;
+      blk.fb[d][k] = fe;
+      blk.fc[d][k] = -fe;
+      blk.fd[d][k] = 0.0;
+    }
+
+  if (wings) {
+    // the triangles' normals n1 = (a - b) x e (triangle ABC) and
+    // n2 = e x (d - b) (BCD), |n| = twice the area
+    for (int k = 0; k < nb; ++k) {
+      const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
+      const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
+      const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
+      const double n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
+      const double n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
+      const double n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
+      const double n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
+      bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0); // degenerate triangle
+      blk.n1[0][k] = n1x, blk.n1[1][k] = n1y, blk.n1[2][k] = n1z;
+      blk.n2[0][k] = n2x, blk.n2[1][k] = n2y, blk.n2[2][k] = n2z;
+      blk.n1_2[k] = n1_2;
+      blk.n2_2[k] = n2_2;
+    }
+    if (bad)
+      return false;
+  }
+
+  if (kb != 0.0) {
+    // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
+    // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
+    // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
+    int slow = 0;
+    for (int k = 0; k < nb; ++k) {
+      const double y = blk.l[k] * (blk.n1[0][k] * blk.w[0][k] + blk.n1[1][k] * blk.w[1][k] +
+                                   blk.n1[2][k] * blk.w[2][k]);
+      const double x =
+          blk.n1[0][k] * blk.n2[0][k] + blk.n1[1][k] * blk.n2[1][k] + blk.n1[2][k] * blk.n2[2][k];
+      const double c0 = cos_psi0[k], s0 = sin_psi0[k];
+      const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
+      const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+      slow |= !small;
+      blk.dphi[k] = -atan_small(small ? sine / cosine : 0.0);
+      blk.sine[k] = sine;
+      blk.cosine[k] = cosine;
+    }
+    if (slow) // deviations beyond atan(1/4): the library's arctangent
+      for (int k = 0; k < nb; ++k) {
+        const double sine = blk.sine[k], cosine = blk.cosine[k];
+        if (cosine > 0.0 && std::abs(sine) <= 0.25 * cosine)
+          continue;
+        double dphi = -std::atan2(sine, cosine);
+        if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
+          dphi += 2.0 * M_PI;
+        blk.dphi[k] = dphi;
+      }
+    // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
+    // split by the wings' foot points ta, td (oif_bending.hpp)
+    for (int k = 0; k < nb; ++k) {
+      const double c = kb * blk.dphi[k] * blk.l[k] / (blk.n1_2[k] * blk.n2_2[k]);
+      const double ca = c * blk.n2_2[k], cd = c * blk.n1_2[k];
+      const double ta =
+          (blk.u[0][k] * blk.e[0][k] + blk.u[1][k] * blk.e[1][k] + blk.u[2][k] * blk.e[2][k]) *
+          blk.inv_l2[k];
+      const double td =
+          (blk.w[0][k] * blk.e[0][k] + blk.w[1][k] * blk.e[1][k] + blk.w[2][k] * blk.e[2][k]) *
+          blk.inv_l2[k];
+      for (int d = 0; d < 3; ++d) {
+        const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
+        blk.fa[d][k] += fa;
+        blk.fd[d][k] += fd;
+        blk.fb[d][k] -= (1.0 - ta) * fa + (1.0 - td) * fd;
+        blk.fc[d][k] -= ta * fa + td * fd;
+      }
+    }
+  }
+  return true;
 }
 
-bool FastBondPlan::build_slots(const BondGroup& group, const ParticleStore& p,
-                               std::vector<int>& bond_slots) {
+/** A triangle's key, independent of its orientation: its three slots sorted,
+ *  21 bits each (fewer than kMaxTriangleSlots slots). */
+constexpr std::size_t kMaxTriangleSlots = std::size_t(1) << 21;
+inline std::uint64_t triangle_key(int s0, int s1, int s2) {
+  const int lo = std::min({s0, s1, s2}), hi = std::max({s0, s1, s2});
+  const int mid = s0 + s1 + s2 - lo - hi;
+  return static_cast<std::uint64_t>(lo) | (static_cast<std::uint64_t>(mid) << 21) |
+         (static_cast<std::uint64_t>(hi) << 42);
+}
+
+/** The slots of a group's particles (index: slot -> local particle index;
+ *  bond_slots: the group's ids as slots), grouped in frames: the connected
+ *  sets of bonds (cells), each frame's slots contiguous from frame_begin[f],
+ *  its first slot the frame's reference node. False when a particle is
+ *  missing (the generic loop names it). */
+bool slots_by_frame(const BondGroup& group, const ParticleStore& p, std::vector<int>& index,
+                    std::vector<int>& frame_begin, std::vector<int>& bond_slots) {
   std::vector<int> slot_of(p.n_local(), -1);
-  m_index.clear();
+  index.clear();
   bond_slots.resize(group.ids.size());
   for (std::size_t k = 0; k < group.ids.size(); ++k) {
     const int i = p.index(group.ids[k]);
     if (i < 0)
       return false; // the generic loop names the missing particle
     if (slot_of[i] < 0) {
-      slot_of[i] = static_cast<int>(m_index.size());
-      m_index.push_back(i);
+      slot_of[i] = static_cast<int>(index.size());
+      index.push_back(i);
     }
     bond_slots[k] = slot_of[i];
   }
-  const std::size_t n = m_index.size();
+  const std::size_t n = index.size();
   // frames: the connected sets of the bonds (union-find over slots), each
   // referred to its first slot
   std::vector<int> parent(n);
@@ -160,21 +281,34 @@ bool FastBondPlan::build_slots(const BondGroup& group, const ParticleStore& p,
   }
   std::stable_sort(order.begin(), order.end(),
                    [&](int x, int y) { return frame_of[x] < frame_of[y]; });
-  std::vector<int> index(n);
-  m_frame_begin.clear();
+  std::vector<int> renumbered(n);
+  frame_begin.clear();
   for (std::size_t k = 0; k < n; ++k) {
     if (k == 0 || frame_of[order[k]] != frame_of[order[k - 1]])
-      m_frame_begin.push_back(static_cast<int>(k));
+      frame_begin.push_back(static_cast<int>(k));
     new_slot[order[k]] = static_cast<int>(k);
-    index[k] = m_index[order[k]];
+    renumbered[k] = index[order[k]];
   }
-  m_frame_begin.push_back(static_cast<int>(n));
-  m_index.swap(index);
+  frame_begin.push_back(static_cast<int>(n));
+  index.swap(renumbered);
   for (int& s : bond_slots)
     s = new_slot[s];
-  m_x.resize(n);
-  m_v.resize(n);
-  m_f.resize(n);
+  return true;
+}
+
+} // namespace
+
+GroupKey::GroupKey(const BondGroup& group, const ParticleStore& p, int kind_)
+    : particles_version(p.layout_version), ids(group.ids.data()), per_bond(group.per_bond.data()),
+      n_ids(group.ids.size()), n_per_bond(group.per_bond.size()), kind(kind_) {}
+
+bool FastBondPlan::build_slots(const BondGroup& group, const ParticleStore& p,
+                               std::vector<int>& bond_slots) {
+  if (!slots_by_frame(group, p, m_index, m_frame_begin, bond_slots))
+    return false;
+  m_x.resize(m_index.size());
+  m_v.resize(m_index.size());
+  m_f.resize(m_index.size());
   return true;
 }
 
@@ -193,7 +327,7 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
   // is then kal (weight S - area0), applied once. Owners are chosen so that a
   // bond owns at most one triangle (a closed mesh has 2/3 triangle per edge):
   // each bond then evaluates one centroid allocation, not two.
-  if (m_index.size() >= (std::size_t(1) << 21))
+  if (m_index.size() >= kMaxTriangleSlots)
     return false;
   struct Use {
     std::size_t bond;
@@ -204,12 +338,8 @@ bool FastBondPlan::build_local(const BondGroup& group, const ParticleStore& p) {
   std::vector<std::vector<Use>> uses;
   std::vector<double> area0_sum;
   auto add_triangle = [&](int s0, int s1, int s2, double area0, std::size_t bond, int bcd) {
-    int lo = std::min({s0, s1, s2}), hi = std::max({s0, s1, s2});
-    const int mid = s0 + s1 + s2 - lo - hi;
-    const std::uint64_t key = static_cast<std::uint64_t>(lo) |
-                              (static_cast<std::uint64_t>(mid) << 21) |
-                              (static_cast<std::uint64_t>(hi) << 42);
-    auto [it, inserted] = triangle_of.try_emplace(key, static_cast<int>(uses.size()));
+    auto [it, inserted] =
+        triangle_of.try_emplace(triangle_key(s0, s1, s2), static_cast<int>(uses.size()));
     if (inserted) {
       uses.emplace_back();
       area0_sum.push_back(0.0);
@@ -397,7 +527,7 @@ bool FastBondPlan::commit_forces(ParticleStore& p) const {
 // ---------------------------------------------------------------------------
 bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, ParticleStore& p,
                        const BoxGeometry& box) {
-  const Key key = key_of(group, p, kind_local);
+  const GroupKey key(group, p, kind_local);
   if (!(key == m_key)) {
     m_key = key;
     m_usable = build_local(group, p);
@@ -417,7 +547,7 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
   // loops the compiler vectorises; one bond at a time, its long chain of square
   // roots, divisions and the arctangent leaves the core waiting), then scatter
   // the forces on the four nodes.
-  const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb, kal = ia.kal;
+  const double kvisc = ia.kvisc, kb = ia.kb, kal = ia.kal;
   const bool wings = kb != 0.0 || kal != 0.0; // terms that need a and d
   EdgeBlock blk;
   const ExtraTriangle *extra = m_extra.data(), *const extra_end = extra + m_extra.size();
@@ -463,113 +593,8 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
             minimum_image_axis(blk.w[d], nb, L);
         }
       }
-    int bad = 0;
-    for (int k = 0; k < nb; ++k) {
-      const double l2 =
-          blk.e[0][k] * blk.e[0][k] + blk.e[1][k] * blk.e[1][k] + blk.e[2][k] * blk.e[2][k];
-      bad |= !(l2 > 0.0);
-      blk.l[k] = std::sqrt(l2);
-      blk.inv_l2[k] = 1.0 / l2;
-    }
-    if (bad)
+    if (!edge_block_forces(blk, nb, r0, inv_r0, cos_psi0, sin_psi0, ia, wings))
       return false;
-
-    // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
-    for (int k = 0; k < nb; ++k)
-      blk.coefficient[k] = 0.0;
-    if (ks != 0.0)
-      for (int k = 0; k < nb; ++k) {
-        const double l = blk.l[k];
-        blk.coefficient[k] +=
-            ks * neo_hookean_kappa(l * inv_r0[k]) * (l - r0[k]) * l * blk.inv_l2[k]; // (l - l0) / l
-      }
-    if (kslin != 0.0)
-      for (int k = 0; k < nb; ++k)
-        blk.coefficient[k] += kslin * (blk.l[k] - r0[k]) * blk.l[k] * blk.inv_l2[k];
-    if (kvisc != 0.0)
-      for (int k = 0; k < nb; ++k)
-        blk.coefficient[k] +=
-            kvisc *
-            (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] + blk.dv[2][k] * blk.e[2][k]) *
-            blk.inv_l2[k];
-    for (int k = 0; k < nb; ++k)
-      for (int d = 0; d < 3; ++d) {
-        const double fe = blk.coefficient[k] * blk.e[d][k];
-        blk.fa[d][k] = 0.0;
-        blk.fb[d][k] = fe;
-        blk.fc[d][k] = -fe;
-        blk.fd[d][k] = 0.0;
-      }
-
-    if (wings) {
-      // the triangles' normals n1 = (a - b) x e (triangle ABC) and
-      // n2 = e x (d - b) (BCD), |n| = twice the area
-      for (int k = 0; k < nb; ++k) {
-        const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
-        const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
-        const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
-        const double n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
-        const double n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
-        const double n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
-        const double n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
-        bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0); // degenerate triangle
-        blk.n1[0][k] = n1x, blk.n1[1][k] = n1y, blk.n1[2][k] = n1z;
-        blk.n2[0][k] = n2x, blk.n2[1][k] = n2y, blk.n2[2][k] = n2z;
-        blk.n1_2[k] = n1_2;
-        blk.n2_2[k] = n2_2;
-      }
-      if (bad)
-        return false;
-    }
-
-    if (kb != 0.0) {
-      // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
-      // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
-      // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
-      int slow = 0;
-      for (int k = 0; k < nb; ++k) {
-        const double y = blk.l[k] * (blk.n1[0][k] * blk.w[0][k] + blk.n1[1][k] * blk.w[1][k] +
-                                     blk.n1[2][k] * blk.w[2][k]);
-        const double x =
-            blk.n1[0][k] * blk.n2[0][k] + blk.n1[1][k] * blk.n2[1][k] + blk.n1[2][k] * blk.n2[2][k];
-        const double c0 = cos_psi0[k], s0 = sin_psi0[k];
-        const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
-        const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
-        slow |= !small;
-        blk.dphi[k] = -atan_small(small ? sine / cosine : 0.0);
-        blk.sine[k] = sine;
-        blk.cosine[k] = cosine;
-      }
-      if (slow) // deviations beyond atan(1/4): the library's arctangent
-        for (int k = 0; k < nb; ++k) {
-          const double sine = blk.sine[k], cosine = blk.cosine[k];
-          if (cosine > 0.0 && std::abs(sine) <= 0.25 * cosine)
-            continue;
-          double dphi = -std::atan2(sine, cosine);
-          if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
-            dphi += 2.0 * M_PI;
-          blk.dphi[k] = dphi;
-        }
-      // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
-      // split by the wings' foot points ta, td (oif_bending.hpp)
-      for (int k = 0; k < nb; ++k) {
-        const double c = kb * blk.dphi[k] * blk.l[k] / (blk.n1_2[k] * blk.n2_2[k]);
-        const double ca = c * blk.n2_2[k], cd = c * blk.n1_2[k];
-        const double ta =
-            (blk.u[0][k] * blk.e[0][k] + blk.u[1][k] * blk.e[1][k] + blk.u[2][k] * blk.e[2][k]) *
-            blk.inv_l2[k];
-        const double td =
-            (blk.w[0][k] * blk.e[0][k] + blk.w[1][k] * blk.e[1][k] + blk.w[2][k] * blk.e[2][k]) *
-            blk.inv_l2[k];
-        for (int d = 0; d < 3; ++d) {
-          const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
-          blk.fa[d][k] += fa;
-          blk.fd[d][k] += fd;
-          blk.fb[d][k] -= (1.0 - ta) * fa + (1.0 - td) * fd;
-          blk.fc[d][k] -= ta * fa + td * fd;
-        }
-      }
-    }
 
     if (kal != 0.0) {
       // local area (eq. 5) of the triangle this bond owns (weight 0 else),
@@ -640,7 +665,7 @@ bool FastBondPlan::run(const OifLocalForces& ia, const BondGroup& group, Particl
 // ---------------------------------------------------------------------------
 bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, ParticleStore& p,
                        const BoxGeometry& box) {
-  const Key key = key_of(group, p, kind_global);
+  const GroupKey key(group, p, kind_global);
   if (!(key == m_key)) {
     m_key = key;
     m_usable = build_triangles(group, p);
@@ -796,7 +821,7 @@ bool FastBondPlan::same_triangles(const BondGroup& own, const BondGroup& source)
 // ---------------------------------------------------------------------------
 bool FastBondPlan::run(const OifOutDirection&, const BondGroup& group, ParticleStore& p,
                        const BoxGeometry& box) {
-  const Key key = key_of(group, p, kind_out_direction);
+  const GroupKey key(group, p, kind_out_direction);
   if (!(key == m_key)) {
     m_key = key;
     m_usable = build_triangles(group, p);
@@ -840,6 +865,427 @@ bool FastBondPlan::run(const OifOutDirection&, const BondGroup& group, ParticleS
     const double len = m_f[s].norm();
     p.normal[m_index[s]] = len > 0.0 ? Vec3(m_f[s] / len) : m_f[s];
   }
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+// OifLocalForces + OifGlobalForces (+ OifOutDirection normals), fused
+// ---------------------------------------------------------------------------
+bool FusedMembranePlan::same_particles(const BondGroup& local, const BondGroup& global) {
+  const Link now{local.ids.data(), local.ids.size(), global.ids.data(), global.ids.size()};
+  if (!(now == m_link)) {
+    m_link = now;
+    auto sorted_unique = [](std::vector<int> ids) {
+      std::sort(ids.begin(), ids.end());
+      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+      return ids;
+    };
+    m_link_same = local.n_particles == 4 && global.n_particles == 3 && !local.ids.empty() &&
+                  sorted_unique(local.ids) == sorted_unique(global.ids);
+  }
+  return m_link_same;
+}
+
+bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
+                              const ParticleStore& p) {
+  if (local.n_particles != 4 || local.per_bond_stride != 4 || global.n_particles != 3)
+    return false;
+  std::vector<int> frame_begin, tri_slots;
+  if (!slots_by_frame(global, p, m_index, frame_begin, tri_slots) ||
+      m_index.size() >= kMaxTriangleSlots)
+    return false;
+  const std::size_t n_slots = m_index.size(), n_cells = frame_begin.size() - 1;
+  // cells: the frames (connected sets of triangles), each of one mol_id and
+  // no two of the same, so that they are the cells of the generic cell sums
+  // (triangles grouped by the mol_id of their first node)
+  std::vector<int> slot_cell(n_slots);
+  m_slot_mol.resize(n_slots);
+  std::unordered_set<int> mols;
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    const int mol = p.mol_id[m_index[frame_begin[c]]];
+    if (!mols.insert(mol).second)
+      return false;
+    for (int s = frame_begin[c]; s < frame_begin[c + 1]; ++s) {
+      m_slot_mol[s] = p.mol_id[m_index[s]];
+      if (m_slot_mol[s] != mol)
+        return false;
+      slot_cell[s] = static_cast<int>(c);
+    }
+  }
+  // triangles cell by cell, the group's order kept within a cell (counting sort)
+  const std::size_t n_tri = global.size();
+  std::vector<int> tri_begin(n_cells + 1, 0);
+  for (std::size_t t = 0; t < n_tri; ++t)
+    ++tri_begin[slot_cell[tri_slots[3 * t]] + 1];
+  for (std::size_t c = 0; c < n_cells; ++c)
+    tri_begin[c + 1] += tri_begin[c];
+  std::vector<int> next(tri_begin.begin(), tri_begin.end() - 1);
+  for (auto* v : {&m_tri_v0, &m_tri_v1, &m_tri_v2})
+    v->resize(n_tri);
+  m_tri_weight.assign(n_tri, 0.0);
+  m_tri_area0.assign(n_tri, 0.0);
+  std::unordered_map<std::uint64_t, int> triangle_of;
+  triangle_of.reserve(n_tri);
+  for (std::size_t t = 0; t < n_tri; ++t) {
+    const int* s = tri_slots.data() + 3 * t;
+    const int c = slot_cell[s[0]], q = next[c]++, base = frame_begin[c];
+    m_tri_v0[q] = s[0] - base;
+    m_tri_v1[q] = s[1] - base;
+    m_tri_v2[q] = s[2] - base;
+    triangle_of.try_emplace(triangle_key(s[0], s[1], s[2]), q);
+  }
+  // edges: the local bonds as slots, their triangles ABC and BCD among the
+  // global group's (else the groups do not pair up)
+  std::vector<int> slot_of(p.n_local(), -1);
+  for (std::size_t s = 0; s < n_slots; ++s)
+    slot_of[m_index[s]] = static_cast<int>(s);
+  const std::size_t n_edges = local.size();
+  std::vector<int> edge_slots(4 * n_edges), edge_begin(n_cells + 1, 0);
+  for (std::size_t b = 0; b < n_edges; ++b) {
+    int* s = edge_slots.data() + 4 * b; // (B, A, C, D)
+    for (int j = 0; j < 4; ++j) {
+      const int i = p.index(local.bond(b)[j]);
+      s[j] = i < 0 ? -1 : slot_of[i];
+      if (s[j] < 0)
+        return false;
+    }
+    const double* ref = local.reference(b);
+    // the generic loop rejects these as degenerate (and throws): leave it to it
+    if (!(ref[0] > 0.0) || !(ref[2] > 0.0) || !(ref[3] > 0.0) || !std::isfinite(ref[1]))
+      return false;
+    const auto abc = triangle_of.find(triangle_key(s[1], s[0], s[2]));
+    const auto bcd = triangle_of.find(triangle_key(s[0], s[2], s[3]));
+    if (abc == triangle_of.end() || bcd == triangle_of.end())
+      return false;
+    // eq. 5 per bond: kal (S - S0_bond) / 3 on each of its two triangles
+    m_tri_weight[abc->second] += 1.0 / 3.0;
+    m_tri_area0[abc->second] += ref[2] / 3.0;
+    m_tri_weight[bcd->second] += 1.0 / 3.0;
+    m_tri_area0[bcd->second] += ref[3] / 3.0;
+    ++edge_begin[slot_cell[s[0]] + 1];
+  }
+  for (std::size_t c = 0; c < n_cells; ++c)
+    edge_begin[c + 1] += edge_begin[c];
+  next.assign(edge_begin.begin(), edge_begin.end() - 1);
+  for (auto* v : {&m_edge_b, &m_edge_a, &m_edge_c, &m_edge_d})
+    v->resize(n_edges);
+  for (auto* v : {&m_edge_r0, &m_edge_inv_r0, &m_edge_cos_psi0, &m_edge_sin_psi0})
+    v->resize(n_edges);
+  for (std::size_t b = 0; b < n_edges; ++b) {
+    const int* s = edge_slots.data() + 4 * b;
+    const int c = slot_cell[s[0]], q = next[c]++, base = frame_begin[c];
+    m_edge_b[q] = s[0] - base;
+    m_edge_a[q] = s[1] - base;
+    m_edge_c[q] = s[2] - base;
+    m_edge_d[q] = s[3] - base;
+    const double* ref = local.reference(b);
+    m_edge_r0[q] = ref[0];
+    m_edge_inv_r0[q] = 1.0 / ref[0];
+    // psi0 = pi - phi0: cos psi0 = -cos phi0, sin psi0 = sin phi0
+    m_edge_cos_psi0[q] = -std::cos(ref[1]);
+    m_edge_sin_psi0[q] = std::sin(ref[1]);
+  }
+  m_cells.resize(n_cells);
+  std::size_t largest_nodes = 0, largest_tri = 0;
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    CellRange& r = m_cells[c];
+    r.node_begin = frame_begin[c];
+    r.node_end = frame_begin[c + 1];
+    r.triangle_begin = tri_begin[c];
+    r.triangle_end = tri_begin[c + 1];
+    r.edge_begin = edge_begin[c];
+    r.edge_end = edge_begin[c + 1];
+    // the generic cell sums' reference point: the first node of the cell's
+    // first triangle (the volume of an open mesh depends on it)
+    r.origin = m_tri_v0[r.triangle_begin];
+    largest_nodes = std::max<std::size_t>(largest_nodes, r.node_end - r.node_begin);
+    largest_tri = std::max<std::size_t>(largest_tri, r.triangle_end - r.triangle_begin);
+  }
+  m_node.assign(kNodeArrays * largest_nodes, Vec3::Zero());
+  m_tri.assign(kTriangleArrays * largest_tri, 0.0);
+  m_f.resize(n_slots);
+  m_normal.resize(n_slots);
+  return true;
+}
+
+bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
+                                    const BoxGeometry& box, bool velocities, bool* regroup) {
+  const CellRange& r = m_cells[cell];
+  const std::size_t section = m_node.size() / kNodeArrays; // largest cell's nodes
+  Vec3* const x = m_node.data();
+  const Vec3& L = box.length();
+  const int ref = m_index[r.node_begin];
+  const Vec3 pos_r = p.pos[ref];
+  const Vec3i image_r = p.image[ref];
+  Vec3 low = Vec3::Zero(), high = Vec3::Zero();
+  int same = 1;
+  for (int s = r.node_begin; s < r.node_end; ++s) {
+    const int i = m_index[s];
+    same &= p.mol_id[i] == m_slot_mol[s];
+    // unfolded relative to the reference node, the image difference first
+    // (integers, exact), as FastBondPlan::gather_relative
+    const Vec3 xk = (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(L);
+    x[s - r.node_begin] = xk;
+    low = low.cwiseMin(xk);
+    high = high.cwiseMax(xk);
+  }
+  if (!same) {
+    *regroup = true;
+    return false;
+  }
+  // within half the box on every periodic axis, all the cell's separations
+  // are their own minimum images; else the separate plans take the minimum
+  // image per separation
+  for (int d = 0; d < 3; ++d)
+    if (box.periodic()[d] && high[d] - low[d] > 0.5 * L[d])
+      return false;
+  if (velocities) {
+    Vec3* const v = m_node.data() + section;
+    for (int s = r.node_begin; s < r.node_end; ++s)
+      v[s - r.node_begin] = p.vel[m_index[s]];
+  }
+  return true;
+}
+
+bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
+                                      const OifGlobalForces& global_ia, bool write_normals) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "node arrays are read as arrays of doubles");
+  const CellRange& r = m_cells[cell];
+  const int n_nodes = r.node_end - r.node_begin, n_tri = r.triangle_end - r.triangle_begin;
+  // node arrays, 3 doubles per node (the scalar gathers and scatters of the
+  // passes below touch one cache line per node, not three)
+  const std::size_t section = m_node.size() / kNodeArrays, ts = m_tri.size() / kTriangleArrays;
+  const double* const x = m_node[0].data();
+  const double* const v = m_node[section].data();
+  double* const f = m_node[2 * section].data();
+  double* const nsum = m_node[3 * section].data();
+  std::fill(f, f + 3 * n_nodes, 0.0);
+  std::fill(nsum, nsum + 3 * n_nodes, 0.0);
+  double* const tri = m_tri.data();
+  double *const e1x = tri, *const e1y = tri + ts, *const e1z = tri + 2 * ts;
+  double *const e2x = tri + 3 * ts, *const e2y = tri + 4 * ts, *const e2z = tri + 5 * ts;
+  double *const nx = tri + 6 * ts, *const ny = tri + 7 * ts, *const nz = tri + 8 * ts;
+  double *const area = tri + 9 * ts, *const vol = tri + 10 * ts, *const g = tri + 11 * ts,
+                *const coef = tri + 12 * ts;
+  const int *const v0 = m_tri_v0.data() + r.triangle_begin,
+                   *const v1 = m_tri_v1.data() + r.triangle_begin,
+                   *const v2 = m_tri_v2.data() + r.triangle_begin;
+  const double *const weight = m_tri_weight.data() + r.triangle_begin, *const area0 =
+                                                                           m_tri_area0.data() +
+                                                                           r.triangle_begin;
+
+  // Triangle pass: per triangle N = (b - a) x (c - a), its area S = |N|/2
+  // and volume term a.N (eqs. 6, 7; a relative to the cell's reference
+  // point), and the two centroid allocations (oif_area.hpp), which share
+  // their direction: vertex i gets (T - p_i) / sum_j |T - p_j|^2 times
+  //   kal (weight S - area0) for the local area (eq. 5; coef below), and
+  //   kag (S_cell - S_cell0) / S_cell0 S for the global area (eq. 6; g
+  //   below, the cell's factor applied once the cell's area is known).
+  // In blocks: the scalar gather of the separations, then the arithmetic as
+  // loops over arrays (vectorised).
+  const double kal = local_ia.kal;
+  const double* const origin = x + 3 * r.origin;
+  constexpr double third = 1.0 / 3.0;
+  int bad = 0;
+  for (int first = 0; first < n_tri; first += kBlock) {
+    const int nb = std::min(kBlock, n_tri - first);
+    double ra[3][kBlock];
+    for (int k = 0; k < nb; ++k) {
+      const int q = first + k;
+      const double *const pa = x + 3 * v0[q], *const pb = x + 3 * v1[q], *const pc = x + 3 * v2[q];
+      e1x[q] = pb[0] - pa[0], e1y[q] = pb[1] - pa[1], e1z[q] = pb[2] - pa[2];
+      e2x[q] = pc[0] - pa[0], e2y[q] = pc[1] - pa[1], e2z[q] = pc[2] - pa[2];
+      for (int d = 0; d < 3; ++d)
+        ra[d][k] = pa[d] - origin[d];
+    }
+    PYOIF_INDEPENDENT_ITERATIONS
+    for (int k = 0; k < nb; ++k) {
+      const int q = first + k;
+      const double e1x_ = e1x[q], e1y_ = e1y[q], e1z_ = e1z[q];
+      const double e2x_ = e2x[q], e2y_ = e2y[q], e2z_ = e2z[q];
+      const double nx_ = e1y_ * e2z_ - e1z_ * e2y_;
+      const double ny_ = e1z_ * e2x_ - e1x_ * e2z_;
+      const double nz_ = e1x_ * e2y_ - e1y_ * e2x_;
+      const double s = 0.5 * std::sqrt(nx_ * nx_ + ny_ * ny_ + nz_ * nz_);
+      bad |= !(s > 0.0);
+      area[q] = s;
+      vol[q] = ra[0][k] * nx_ + ra[1][k] * ny_ + ra[2][k] * nz_;
+      nx[q] = nx_, ny[q] = ny_, nz[q] = nz_;
+      // centroid relative to the first vertex: T - p0 = (e1 + e2) / 3
+      const double m0x = (e1x_ + e2x_) * third, m0y = (e1y_ + e2y_) * third,
+                   m0z = (e1z_ + e2z_) * third;
+      const double m1x = m0x - e1x_, m1y = m0y - e1y_, m1z = m0z - e1z_;
+      const double m2x = m0x - e2x_, m2y = m0y - e2y_, m2z = m0z - e2z_;
+      const double inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
+                                      m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
+      g[q] = s * inv_norm2;
+      coef[q] = kal * (weight[q] * s - area0[q]) * inv_norm2;
+    }
+  }
+  if (bad)
+    return false;
+  // the cell's area and volume, four partial sums (no loop-carried chain)
+  double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
+  int k4 = 0;
+  for (; k4 + 4 <= n_tri; k4 += 4)
+    for (int j = 0; j < 4; ++j) {
+      sa[j] += area[k4 + j];
+      sv[j] += vol[k4 + j];
+    }
+  for (; k4 < n_tri; ++k4) {
+    sa[0] += area[k4];
+    sv[0] += vol[k4];
+  }
+  const double cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
+  const double cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
+  if (!(cell_area > 0.0))
+    return false;
+  const double ka_g = global_ia.ka_g, kv = global_ia.kv, A0_g = global_ia.A0_g, V0 = global_ia.V0;
+  // global area (eq. 6): kag (S_cell - S_cell0) / S_cell0 times g
+  const double area_factor = ka_g != 0.0 ? ka_g * (cell_area - A0_g) / A0_g : 0.0;
+  // volume (eq. 7): F = -kv (|V| - V0) / V0 s N / 6 on each vertex
+  const double sign = cell_volume < 0.0 ? -1.0 : 1.0;
+  const double volume_factor =
+      kv != 0.0 ? -kv * ((sign * cell_volume - V0) / V0) * sign / 6.0 : 0.0;
+
+  // the area forces along (T - p_i) on the vertices, in blocks: the
+  // arithmetic as array loops, then the scatter; the normals N summed per
+  // node (the volume force and the node normal are along that sum)
+  const bool normal_sums = volume_factor != 0.0 || write_normals;
+  for (int first = 0; first < n_tri; first += kBlock) {
+    const int nb = std::min(kBlock, n_tri - first);
+    double f0[3][kBlock], f1[3][kBlock], f2[3][kBlock];
+    for (int k = 0; k < nb; ++k) {
+      const int q = first + k;
+      const double cq = coef[q] + area_factor * g[q];
+      const double m0x = (e1x[q] + e2x[q]) * third, m0y = (e1y[q] + e2y[q]) * third,
+                   m0z = (e1z[q] + e2z[q]) * third;
+      f0[0][k] = cq * m0x, f0[1][k] = cq * m0y, f0[2][k] = cq * m0z;
+      f1[0][k] = cq * (m0x - e1x[q]), f1[1][k] = cq * (m0y - e1y[q]),
+      f1[2][k] = cq * (m0z - e1z[q]);
+      f2[0][k] = cq * (m0x - e2x[q]), f2[1][k] = cq * (m0y - e2y[q]),
+      f2[2][k] = cq * (m0z - e2z[q]);
+    }
+    for (int k = 0; k < nb; ++k) {
+      const int q = first + k;
+      double *const fa = f + 3 * v0[q], *const fb = f + 3 * v1[q], *const fc = f + 3 * v2[q];
+      for (int d = 0; d < 3; ++d) {
+        fa[d] += f0[d][k];
+        fb[d] += f1[d][k];
+        fc[d] += f2[d][k];
+      }
+      if (normal_sums) {
+        double *const sa_ = nsum + 3 * v0[q], *const sb = nsum + 3 * v1[q],
+                      *const sc = nsum + 3 * v2[q];
+        const double n_[3] = {nx[q], ny[q], nz[q]};
+        for (int d = 0; d < 3; ++d) {
+          sa_[d] += n_[d];
+          sb[d] += n_[d];
+          sc[d] += n_[d];
+        }
+      }
+    }
+  }
+
+  // Edge pass: stretching (eq. 3), viscosity and bending (eq. 4) per local
+  // bond (B, A, C, D), edge B-C, in blocks (as FastBondPlan's edge pass)
+  const bool wings = local_ia.kb != 0.0, velocities = local_ia.kvisc != 0.0;
+  EdgeBlock blk;
+  for (int first = r.edge_begin; first < r.edge_end; first += kBlock) {
+    const int nb = std::min(kBlock, r.edge_end - first);
+    const int *const eb = m_edge_b.data() + first, *const ea = m_edge_a.data() + first,
+                     *const ec = m_edge_c.data() + first, *const ed = m_edge_d.data() + first;
+    for (int k = 0; k < nb; ++k) {
+      const double *const xb = x + 3 * eb[k], *const xc = x + 3 * ec[k];
+      for (int d = 0; d < 3; ++d)
+        blk.e[d][k] = xc[d] - xb[d];
+      if (wings) {
+        const double *const xa = x + 3 * ea[k], *const xd = x + 3 * ed[k];
+        for (int d = 0; d < 3; ++d) {
+          blk.u[d][k] = xa[d] - xb[d];
+          blk.w[d][k] = xd[d] - xb[d];
+        }
+      }
+      if (velocities) {
+        const double *const vb = v + 3 * eb[k], *const vc = v + 3 * ec[k];
+        for (int d = 0; d < 3; ++d)
+          blk.dv[d][k] = vc[d] - vb[d];
+      }
+    }
+    if (!edge_block_forces(blk, nb, m_edge_r0.data() + first, m_edge_inv_r0.data() + first,
+                           m_edge_cos_psi0.data() + first, m_edge_sin_psi0.data() + first, local_ia,
+                           wings))
+      return false;
+    for (int k = 0; k < nb; ++k) {
+      double *const fb = f + 3 * eb[k], *const fc = f + 3 * ec[k];
+      for (int d = 0; d < 3; ++d) {
+        fb[d] += blk.fb[d][k];
+        fc[d] += blk.fc[d][k];
+      }
+      if (wings) {
+        double *const fa = f + 3 * ea[k], *const fd = f + 3 * ed[k];
+        for (int d = 0; d < 3; ++d) {
+          fa[d] += blk.fa[d][k];
+          fd[d] += blk.fd[d][k];
+        }
+      }
+    }
+  }
+
+  // per node: the volume force along its normal sum; NaN or inf anywhere:
+  // decline (the generic loop names the bond)
+  const double largest = std::numeric_limits<double>::max();
+  int finite = 1;
+  for (int k = 0; k < 3 * n_nodes; ++k) {
+    f[k] += volume_factor * nsum[k];
+    finite &= std::abs(f[k]) <= largest;
+  }
+  if (!finite)
+    return false;
+  const Vec3* const fv = m_node.data() + 2 * section;
+  std::copy(fv, fv + n_nodes, m_f.begin() + r.node_begin);
+  if (write_normals) { // OifOutDirection's area-weighted normals, outward by the volume's sign
+    const Vec3* const sum = m_node.data() + 3 * section;
+    Vec3* const normal = m_normal.data() + r.node_begin;
+    for (int k = 0; k < n_nodes; ++k) {
+      const double len = sum[k].norm();
+      normal[k] = len > 0.0 ? Vec3(sign * sum[k] / len) : Vec3(sign * sum[k]);
+    }
+  }
+  return true;
+}
+
+bool FusedMembranePlan::run(const OifLocalForces& local_ia, const BondGroup& local,
+                            const OifGlobalForces& global_ia, const BondGroup& global,
+                            bool write_normals, ParticleStore& p, const BoxGeometry& box) {
+  const GroupKey local_key(local, p, kind_local), global_key(global, p, kind_global);
+  if (!(local_key == m_local_key) || !(global_key == m_global_key)) {
+    m_local_key = local_key;
+    m_global_key = global_key;
+    m_usable = build(local, global, p);
+    ++m_n_builds;
+  }
+  if (!m_usable)
+    return false;
+  const bool velocities = local_ia.kvisc != 0.0;
+  for (std::size_t cell = 0; cell < m_cells.size(); ++cell) {
+    bool regroup = false;
+    if (!gather_cell(cell, p, box, velocities, &regroup)) {
+      if (!regroup)
+        return false;
+      // a mol_id changed: the cells regroup (or the groups no longer pair up)
+      m_usable = build(local, global, p);
+      ++m_n_builds;
+      return m_usable && run(local_ia, local, global_ia, global, write_normals, p, box);
+    }
+    if (!evaluate_cell(cell, local_ia, global_ia, write_normals))
+      return false;
+  }
+  for (std::size_t s = 0; s < m_index.size(); ++s)
+    p.force[m_index[s]] += m_f[s];
+  if (write_normals)
+    for (std::size_t s = 0; s < m_index.size(); ++s)
+      p.normal[m_index[s]] = m_normal[s];
   return true;
 }
 

@@ -34,6 +34,20 @@
 //    directions of the latter, so that group needs no pass of its own.
 //    Declines (generic loop) when a node is in triangles of two cells.
 //  - OifOutDirection otherwise: one pass over the triangles for the normals.
+//  - An OifCellType's OifLocalForces and OifGlobalForces groups together
+//    (FusedMembranePlan; add_bonded_forces pairs a local group with a global
+//    group over the same particles), cell by cell: one gather of the cell's
+//    nodes (unfolded, relative to its first node), one pass over its
+//    triangles -- N, area and centroid once per triangle for the local area
+//    (eq. 5; weight and area0 of the local bonds that have the triangle, as
+//    above) and the cell's area and volume (eqs. 6, 7) -- then, with the
+//    cell's factors known, the area forces along the shared centroid
+//    directions, the volume forces and node normals from the per-node sums
+//    of N; the edge pass for stretching, viscosity and bending alone; one
+//    commit. Declines (each group's own plan) unless every triangle of a
+//    local bond is a global one and each connected set of triangles is one
+//    cell (one mol_id, no other set with it), and for a cell wider than half
+//    the box.
 // Forces are accumulated per slot and added to the particles only when the
 // whole group succeeded: on a degenerate or broken bond (or any non-finite
 // force) run() returns false without touching the particles, and the caller
@@ -62,6 +76,23 @@ template <class IA>
 constexpr bool has_fast_path =
     std::is_same_v<IA, OifLocalForces> || std::is_same_v<IA, OifGlobalForces> ||
     std::is_same_v<IA, OifOutDirection>;
+
+/** What a plan was derived from: a group's bond arrays (their addresses and
+ *  sizes: adding or removing bonds changes them) and the particle store's
+ *  layout version (local indices). */
+struct GroupKey {
+  std::uint64_t particles_version = 0;
+  const void* ids = nullptr;
+  const void* per_bond = nullptr;
+  std::size_t n_ids = 0, n_per_bond = 0;
+  int kind = -1;
+  GroupKey() = default;
+  GroupKey(const BondGroup& group, const ParticleStore& p, int kind_);
+  bool operator==(const GroupKey& o) const {
+    return particles_version == o.particles_version && ids == o.ids && per_bond == o.per_bond &&
+           n_ids == o.n_ids && n_per_bond == o.n_per_bond && kind == o.kind;
+  }
+};
 
 class FastBondPlan {
 public:
@@ -123,19 +154,6 @@ private:
     int cell;
   };
 
-  struct Key {
-    std::uint64_t particles_version = 0;
-    const void* ids = nullptr;
-    const void* per_bond = nullptr;
-    std::size_t n_ids = 0, n_per_bond = 0;
-    int kind = -1;
-    bool operator==(const Key& o) const {
-      return particles_version == o.particles_version && ids == o.ids && per_bond == o.per_bond &&
-             n_ids == o.n_ids && n_per_bond == o.n_per_bond && kind == o.kind;
-    }
-  };
-  Key key_of(const BondGroup& group, const ParticleStore& p, int kind) const;
-
   /** Slots of the group's particles; false when a particle is missing. Also
    *  the frames: the connected sets of bonds (cells), their slots contiguous,
    *  the first one the frame's reference node. */
@@ -168,7 +186,7 @@ private:
   bool m_normals_written = false;
   std::vector<Vec3> m_normal; ///< slot -> normal accumulated (write_normals)
 
-  Key m_key;
+  GroupKey m_key;
   bool m_usable = false; ///< false: the group cannot use the fast path (generic loop)
   std::size_t m_n_builds = 0;
 
@@ -195,6 +213,93 @@ private:
   static constexpr int kCellArrays = 23; ///< per-triangle arrays of one cell's pass
   std::vector<double> m_scratch;         ///< kCellArrays x (largest cell's triangles)
   std::vector<double> m_outward_sign;    ///< OifOutDirection: +1/-1 per triangle
+};
+
+/** An OifCellType's OifLocalForces and OifGlobalForces groups, and the node
+ *  normals of its OifOutDirection group, evaluated together cell by cell
+ *  (see the file comment). Derived once per set of bonds and particles, when
+ *  the two groups pair up: every triangle of a local bond (ABC, BCD) is one of
+ *  the global group's, and the cells (mol_ids) of the global group are its
+ *  connected sets of triangles. Otherwise it declines and the groups use
+ *  their own FastBondPlans. */
+class FusedMembranePlan {
+public:
+  /** Whether `local` and `global` hold the same particles (as an
+   *  OifCellType's groups do): the pair to fuse. Compared once per change of
+   *  either group's bonds. */
+  bool same_particles(const BondGroup& local, const BondGroup& global);
+  /** The bonded id of the OifGlobalForces group this OifLocalForces group was
+   *  fused with at the last step, -1 if none (tried first next step). */
+  int partner = -1;
+
+  /** Adds the forces of both groups; with write_normals also the node normals
+   *  of an OifOutDirection group over the global group's triangles. Returns
+   *  false, with the particles untouched, when the groups do not pair up or
+   *  the fused pass cannot evaluate them (degenerate or broken bond,
+   *  non-finite force, a cell wider than half the box): the caller then runs
+   *  each group's own plan. */
+  bool run(const OifLocalForces& local_ia, const BondGroup& local, const OifGlobalForces& global_ia,
+           const BondGroup& global, bool write_normals, ParticleStore& p, const BoxGeometry& box);
+
+  /** Number of (re)builds so far, and whether the last one paired the groups
+   *  up (tests: the fused pass is the one taken). */
+  std::size_t n_builds() const { return m_n_builds; }
+  bool fused() const { return m_usable; }
+
+private:
+  bool build(const BondGroup& local, const BondGroup& global, const ParticleStore& p);
+  /** Positions (and velocities) of a cell's nodes relative to its reference
+   *  node into m_node; false when the cell spans more than half the box on
+   *  a periodic axis or a node's mol_id changed (*regroup set). */
+  bool gather_cell(std::size_t cell, const ParticleStore& p, const BoxGeometry& box,
+                   bool velocities, bool* regroup);
+  /** Forces (and normals) of one cell into m_f (m_normal); false on a
+   *  degenerate triangle or edge or a non-finite force. */
+  bool evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
+                     const OifGlobalForces& global_ia, bool write_normals);
+
+  struct Link {
+    const int* local = nullptr;
+    std::size_t n_local = 0;
+    const int* global = nullptr;
+    std::size_t n_global = 0;
+    bool operator==(const Link& o) const {
+      return local == o.local && n_local == o.n_local && global == o.global &&
+             n_global == o.n_global;
+    }
+  };
+  Link m_link;
+  bool m_link_same = false;
+
+  GroupKey m_local_key, m_global_key;
+  bool m_usable = false;
+  std::size_t m_n_builds = 0;
+
+  /** A cell's nodes (slots), triangles and edges: contiguous ranges. */
+  struct CellRange {
+    int node_begin, node_end;
+    int triangle_begin, triangle_end;
+    int edge_begin, edge_end;
+    int origin; ///< cell-local index of the volume's reference point
+  };
+  std::vector<CellRange> m_cells;
+  std::vector<int> m_index;    ///< slot -> local particle index
+  std::vector<int> m_slot_mol; ///< slot -> mol_id at build
+  // triangles (global group order within a cell), vertices as cell-local
+  // node indices, with the local area (eq. 5) terms of the local bonds that
+  // have them: weight = (bonds) / 3, area0 = sum of their references / 3
+  std::vector<int> m_tri_v0, m_tri_v1, m_tri_v2;
+  std::vector<double> m_tri_weight, m_tri_area0;
+  // edges (local bonds B, A, C, D) as cell-local node indices, references
+  std::vector<int> m_edge_b, m_edge_a, m_edge_c, m_edge_d;
+  std::vector<double> m_edge_r0, m_edge_inv_r0, m_edge_cos_psi0, m_edge_sin_psi0;
+
+  static constexpr int kNodeArrays = 4;      ///< x, v, f, normal sum
+  static constexpr int kTriangleArrays = 13; ///< e1, e2, N: 3 each; area, volume, g, c
+  std::vector<Vec3> m_node;                  ///< kNodeArrays x (largest cell's nodes)
+  std::vector<double> m_tri;                 ///< kTriangleArrays x (largest cell's triangles)
+  std::vector<Vec3> m_f;                     ///< slot -> force of this step
+  std::vector<Vec3> m_normal;                ///< slot -> unit normal (write_normals)
 };
 
 } // namespace pyoif::oif
