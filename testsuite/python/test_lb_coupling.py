@@ -9,6 +9,13 @@
   tau = 5 time steps (the fluid gets the impulse at its next update) and the
   particle crossing the periodic boundary at a corner; also with kT > 0
   (fluid and coupling noise both conserve it).
+- Deposits reach the populations: with particles spread over a box of many
+  force-field chunks (64 nodes each; an update applies only the chunks that
+  received a deposit) and tau = time step, the momentum of the populations
+  after each update (the sum of density * velocity over the nodes, no force
+  field involved) equals what the particles gave: p0 - P - dt/2 sum F (the
+  fluid has the whole impulse of the last coupling force F, the particles
+  only half of it so far), to 1e-12 of p0.
 - The interpolated velocity is trilinear: in a linear velocity field set on
   the nodes it is exact away from the periodic seam (1e-12).
 """
@@ -66,6 +73,28 @@ class Coupling(unittest.TestCase):
 
     def test_momentum_conservation_thermal(self):
         self.check_momentum(1e-3)
+
+    def test_deposits_reach_populations(self):
+        system = lbmd.System(box_l=[12.0, 10.0, 8.0])
+        system.time_step = 0.05
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.05)
+        system.actors.add(lbf)
+        system.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+        rng = np.random.default_rng(5)
+        for _ in range(25):
+            system.part.add(pos=rng.uniform(0.0, 1.0, 3) * system.box_l, v=rng.normal(0.0, 0.5, 3))
+        system.part.add(pos=[11.9, 9.95, 0.05], v=[1.0, 0.5, -0.5])  # across the periodic corner
+        p0 = np.sum(system.part.all().v, axis=0)
+        for _ in range(8):
+            system.integrator.run(5)
+            populations = np.sum(lbf[:, :, :].density[..., None] * lbf[:, :, :].velocity,
+                                 axis=(0, 1, 2))
+            particles = np.sum(system.part.all().v, axis=0)
+            # the fluid got -F dt of the last coupling force F, the particles F dt / 2 so far
+            in_flight = -0.5 * system.time_step * np.sum(system.part.all().f, axis=0)
+            np.testing.assert_allclose(populations, p0 - particles + in_flight, rtol=0,
+                                       atol=1e-12 * np.linalg.norm(p0))
+        self.assertGreater(np.linalg.norm(populations), 0.3 * np.linalg.norm(p0))
 
     def test_trilinear_interpolation(self):
         system, lbf = make()

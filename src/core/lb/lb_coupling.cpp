@@ -31,11 +31,13 @@ inline int wrap_node(int i, int n) {
   return i;
 }
 
-Stencil stencil(const LBFluid& fluid, const Vec3& pos) {
+using CompactStencil = LBFluid::CouplingLedger::Stencil;
+
+CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
   const double inv_agrid = 1.0 / fluid.agrid();
   const Vec3i& n = fluid.grid();
-  int node[3][2]; // the two node indices per axis, folded into [0, N)
-  double frac[3];
+  int lo[3];
+  CompactStencil s;
   for (int d = 0; d < 3; ++d) {
     const double x = pos[d] * inv_agrid - 0.5;
     if (!(std::abs(x) < 1e9)) // NaN or flown away: no index to compute
@@ -44,20 +46,23 @@ Stencil stencil(const LBFluid& fluid, const Vec3& pos) {
                                   std::to_string(pos[2]) +
                                   ") is not finite or far outside the box");
     const double fl = std::floor(x);
-    const int lo = static_cast<int>(fl);
-    frac[d] = x - fl;
-    node[d][0] = wrap_node(lo, n[d]);
-    node[d][1] = wrap_node(lo + 1, n[d]);
+    s.frac[d] = x - fl;
+    lo[d] = wrap_node(static_cast<int>(fl), n[d]);
   }
+  s.base = fluid.padded_index_in_box(lo[0], lo[1], lo[2]);
+  for (int d = 0; d < 3; ++d)
+    s.step[d] =
+        lo[d] + 1 < n[d] ? fluid.padded_axis_stride(d) : fluid.padded_axis_stride(d) * (1 - n[d]);
+  return s;
+}
+
+Stencil stencil(const LBFluid& fluid, const Vec3& pos) {
+  const CompactStencil c = compact_stencil(fluid, pos);
   Stencil s;
-  int m = 0;
-  for (int dz = 0; dz < 2; ++dz)
-    for (int dy = 0; dy < 2; ++dy)
-      for (int dx = 0; dx < 2; ++dx, ++m) {
-        s.node[m] = fluid.padded_index_in_box(node[0][dx], node[1][dy], node[2][dz]);
-        s.weight[m] = (dx ? frac[0] : 1.0 - frac[0]) * (dy ? frac[1] : 1.0 - frac[1]) *
-                      (dz ? frac[2] : 1.0 - frac[2]);
-      }
+  for (int m = 0; m < 8; ++m) {
+    s.node[m] = c.node(m);
+    s.weight[m] = c.weight(m);
+  }
   return s;
 }
 
@@ -81,72 +86,83 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
-  // the force field is switched on (and read by the next update) only when
-  // something is deposited: a fluid without particles keeps the plain kernel
-  const bool deposits = particles.n_local() > 0 || (same_step && !ledger.last_position.empty());
-  double* const field = deposits ? fluid.impulse_field() : nullptr;
-  const double scale = fluid.impulse_scale();
-  auto deposit = [&](const Stencil& s, const Vec3& impulse) {
-    const Vec3 p = scale * impulse;
-    for (int m = 0; m < 8; ++m) {
-      double* g = field + 3 * s.node[m];
-      const double wgt = s.weight[m];
-      g[0] += wgt * p[0];
-      g[1] += wgt * p[1];
-      g[2] += wgt * p[2];
-    }
-  };
-  if (same_step)
-    for (std::size_t i = 0; i < ledger.last_position.size(); ++i)
-      deposit(stencil(fluid, ledger.last_position[i]), -0.5 * ledger.last_impulse[i]);
-  ledger.any = true;
-  ledger.step = step;
   auto& p = particles;
   const std::size_t n = p.n_local();
+  // the force field is switched on (and read by the next update) only when
+  // something is deposited: a fluid without particles keeps the plain kernel
+  if (n > 0 || (same_step && !ledger.last_position.empty()))
+    fluid.open_impulse_field();
+  const double scale = fluid.impulse_scale();
+  if (same_step)
+    for (std::size_t i = 0; i < ledger.last_position.size(); ++i) {
+      const Stencil s = stencil(fluid, ledger.last_position[i]);
+      const Vec3 retract = -0.5 * scale * ledger.last_impulse[i];
+      for (int m = 0; m < 8; ++m)
+        fluid.add_field_impulse(s.node[m], s.weight[m] * retract);
+    }
+  ledger.any = true;
+  ledger.step = step;
   ledger.last_position.resize(n);
   ledger.last_impulse.resize(n);
-  Vec3 impulse_sum = Vec3::Zero();
-  // Three passes: (1) stencils, marking the lattice nodes they need; (2)
-  // those nodes' velocities, in memory order; (3) forces and deposits.
-  if (ledger.velocity.size() != fluid.n_padded_slots()) {
-    ledger.velocity.assign(fluid.n_padded_slots(), Vec3::Zero());
-    ledger.needed.assign((fluid.n_padded_slots() + 63) / 64, 0);
+  // Four passes: (1) stencils, numbering the lattice nodes they need in the
+  // order the particles first touch them; (2) those nodes' velocities,
+  // computed in memory order; (3) per particle the force, its impulse
+  // spread over the nodes' compact entries; (4) the impulses into the
+  // fluid's force field, in memory order. The numbering keeps the entries a
+  // cell's nodes use together (a cell's particles are contiguous), so pass 3
+  // runs from L1 instead of jumping through the lattice-ordered arrays.
+  const std::size_t n_words = (fluid.n_padded_slots() + 63) / 64;
+  if (ledger.needed.size() != n_words) {
+    ledger.needed.assign(n_words, 0);
+    ledger.compact.assign(fluid.n_padded_slots(), 0);
   }
-  ledger.stencil_nodes.resize(8 * n);
-  ledger.stencil_weights.resize(8 * n);
-  std::size_t* const nodes = ledger.stencil_nodes.data();
-  double* const weights = ledger.stencil_weights.data();
+  ledger.stencils.resize(n);
+  ledger.stencil_entries.resize(8 * n);
+  CompactStencil* const stencils = ledger.stencils.data();
+  std::uint32_t* const entries = ledger.stencil_entries.data();
   std::uint64_t* const needed = ledger.needed.data();
-  Vec3* const velocity = ledger.velocity.data();
+  std::uint32_t* const compact = ledger.compact.data();
+  std::uint32_t n_nodes = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Stencil s = stencil(fluid, p.pos[i]);
+    stencils[i] = compact_stencil(fluid, p.pos[i]);
     for (int m = 0; m < 8; ++m) {
-      nodes[8 * i + m] = s.node[m];
-      weights[8 * i + m] = s.weight[m];
-      needed[s.node[m] >> 6] |= std::uint64_t{1} << (s.node[m] & 63);
+      const std::size_t node = stencils[i].node(m);
+      // branch-free: whether a node is new is as good as random
+      const std::uint64_t word = needed[node >> 6], bit = std::uint64_t{1} << (node & 63);
+      const bool is_new = !(word & bit);
+      needed[node >> 6] = word | bit;
+      const std::uint32_t entry = is_new ? n_nodes : compact[node];
+      compact[node] = entry;
+      n_nodes += is_new;
+      entries[8 * i + m] = entry;
     }
   }
-  for (std::size_t word = 0; word < ledger.needed.size(); ++word) {
+  ledger.node.resize(n_nodes);
+  std::size_t* const lattice_order = ledger.node.data();
+  for (std::size_t word = 0, j = 0; word < n_words; ++word) {
     std::uint64_t bits = needed[word];
     if (!bits)
       continue;
     needed[word] = 0;
     do {
-      const std::size_t node = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
-      velocity[node] = fluid.velocity_at_index(node);
+      lattice_order[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
       bits &= bits - 1;
     } while (bits);
   }
+  fluid.compute_coupling_velocities();
+  auto* const state = ledger.node_coupling.data();
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
+  Vec3 impulse_sum = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) {
-    Stencil s;
+    const CompactStencil& s = stencils[i];
+    const std::uint32_t* k = entries + 8 * i;
+    double weight[8];
     Vec3 u = Vec3::Zero();
     for (int m = 0; m < 8; ++m) {
-      s.node[m] = nodes[8 * i + m];
-      s.weight[m] = weights[8 * i + m];
-      u += s.weight[m] * velocity[s.node[m]];
+      weight[m] = s.weight(m);
+      u += weight[m] * state[k[m]].velocity;
     }
     Vec3 f = params.gamma * (u - p.vel[i]);
     if (noise > 0.0) {
@@ -157,10 +173,16 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     p.force[i] += f;
     // the fluid gets -F time_step of momentum per MD step, applied at its next update
     const Vec3 impulse = -time_step * f;
-    deposit(s, fraction * impulse);
+    const Vec3 spread = (scale * fraction) * impulse;
+    for (int m = 0; m < 8; ++m)
+      state[k[m]].impulse += weight[m] * spread;
     ledger.last_position[i] = p.pos[i];
     ledger.last_impulse[i] = impulse;
     impulse_sum += impulse;
+  }
+  for (std::size_t j = 0; j < n_nodes; ++j) {
+    const std::size_t node = lattice_order[j];
+    fluid.add_field_impulse(node, state[compact[node]].impulse);
   }
   ledger.in_flight = 0.5 * impulse_sum;
 }

@@ -330,6 +330,7 @@ void LBFluid::rebuild_geometry() {
         {l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, l.wall_term});
   build_halo_pairs();
   m_field.clear();
+  m_field_chunk.clear();
   m_field_used = false;
 }
 
@@ -462,19 +463,39 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
     m_f[population_slot(q, n)] = equilibrium(q, rho, u_lattice);
 }
 
-double* LBFluid::impulse_field() {
-  if (m_field.empty())
+void LBFluid::open_impulse_field() {
+  if (m_field.empty()) {
     m_field.assign(3 * m_stride, 0.0);
+    m_field_chunk.assign((m_stride >> field_chunk_bits) + 1, 0);
+  }
   m_field_used = true;
-  return m_field.data();
 }
 
 void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
-  const auto field = impulse_field();
+  open_impulse_field();
   // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
-  const double scale = impulse_scale();
-  for (int d = 0; d < 3; ++d)
-    field[3 * n + d] += impulse[d] * scale;
+  add_field_impulse(n, impulse * impulse_scale());
+}
+
+void LBFluid::compute_coupling_velocities() {
+  // The 19 populations of a node lie in 19 streams far apart; the hardware
+  // prefetchers do not follow a sparse walk through them, so the node
+  // `ahead` places down the list is requested while this one is summed.
+  constexpr std::size_t ahead = 16;
+  const std::ptrdiff_t* off = read_offset();
+  const std::size_t* nodes = m_ledger.node.data();
+  const std::size_t count = m_ledger.node.size();
+  m_ledger.node_coupling.resize(count);
+  auto* out = m_ledger.node_coupling.data();
+  const std::uint32_t* entry = m_ledger.compact.data();
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i + ahead < count) {
+      const double* f = m_f + nodes[i + ahead];
+      for (int q = 0; q < Q; ++q)
+        __builtin_prefetch(f + off[q], 0, 1);
+    }
+    out[entry[nodes[i]]] = {velocity_at_index(nodes[i]), Vec3::Zero()};
+  }
 }
 
 double LBFluid::total_mass() const {

@@ -137,21 +137,31 @@ public:
   std::size_t padded_index(int i, int j, int k) const;
   /** Padded index of a node already in [0, N) on every axis (no folding). */
   std::size_t padded_index_in_box(int i, int j, int k) const { return index(i + 1, j + 1, k + 1); }
+  /** Difference of the padded indices of neighbours along axis d. */
+  std::ptrdiff_t padded_axis_stride(int d) const {
+    return d == 0 ? 1 : d == 1 ? m_pad[0] : static_cast<std::ptrdiff_t>(m_pad[0]) * m_pad[1];
+  }
   /** Number of padded node slots (bound of every padded index). */
   std::size_t n_padded_slots() const { return m_stride; }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
   Vec3 velocity_at_index(std::size_t n) const;
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
-  /** The force field the next update applies, for bulk deposits: component d
-   *  of the field at padded index n is impulse_field()[3 n + d]; an impulse p
-   *  (MD units) adds p * impulse_scale(). Allocates the field on first use. */
-  double* impulse_field();
+  /** Bulk deposits: open_impulse_field() switches the force field on for the
+   *  next update (allocating it on first use); then add_field_impulse(n, p)
+   *  adds p = impulse (MD units) * impulse_scale() at padded index n. */
+  void open_impulse_field();
   double impulse_scale() const {
     const double a2 = m_p.agrid * m_p.agrid;
     return m_p.tau / (a2 * a2); // momentum-density change per update, lattice units
   }
-
+  void add_field_impulse(std::size_t n, const Vec3& p) {
+    double* g = m_field.data() + 3 * n;
+    g[0] += p[0];
+    g[1] += p[1];
+    g[2] += p[2];
+    m_field_chunk[n >> field_chunk_bits] = 1;
+  }
   /** Bookkeeping of the particle coupling under velocity Verlet: an MD step's
    *  coupling force F_n acts on the particles in two half kicks (dt/2 at the
    *  end of step n, dt/2 at the start of step n+1) but goes to the fluid at
@@ -167,18 +177,49 @@ public:
     /// spread with the stencil of that position)
     std::vector<Vec3> last_position, last_impulse;
     Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
-    /// Node velocities of the current coupling pass, valid at the nodes the
-    /// pass marked in `needed` (one bit per padded node): each lattice node
-    /// serves several membrane nodes, and its 19 populations lie in 19
-    /// different streams, so they are computed once per pass, in memory
-    /// order (x neighbours share cache lines, the prefetchers see streams).
-    std::vector<Vec3> velocity;
+    /// The stencil of a particle as its first node (lowest index on every
+    /// axis) and, per axis, the index step to the second node (the lattice
+    /// stride, or less the period where the stencil wraps around the box)
+    /// and the fraction towards it: node m = (dx, dy, dz) (m = dx + 2 dy +
+    /// 4 dz) is base + dx step_x + dy step_y + dz step_z, its weight the
+    /// product of (d ? frac : 1 - frac) over the axes.
+    struct Stencil {
+      std::size_t base;
+      std::ptrdiff_t step[3];
+      double frac[3];
+      std::size_t node(int m) const {
+        return static_cast<std::size_t>(static_cast<std::ptrdiff_t>(base) +
+                                        ((m & 1) ? step[0] : 0) + ((m & 2) ? step[1] : 0) +
+                                        ((m & 4) ? step[2] : 0));
+      }
+      double weight(int m) const {
+        return ((m & 1) ? frac[0] : 1.0 - frac[0]) * ((m & 2) ? frac[1] : 1.0 - frac[1]) *
+               ((m & 4) ? frac[2] : 1.0 - frac[2]);
+      }
+    };
+    /// The lattice nodes of the current coupling pass: marked in `needed`
+    /// (one bit per padded node), numbered in the order the particles'
+    /// stencils first touch them (compact[n], stale for unmarked nodes,
+    /// which are never looked up), and listed in memory order in `node`.
+    /// Each lattice node serves several membrane nodes, and its 19
+    /// populations lie in 19 different streams, so its velocity is computed
+    /// once per pass, in memory order, into its compact entry.
     std::vector<std::uint64_t> needed;
-    /// the 8 stencil nodes and weights per particle of the current pass
-    std::vector<std::size_t> stencil_nodes;
-    std::vector<double> stencil_weights;
+    std::vector<std::uint32_t> compact;
+    std::vector<std::size_t> node;
+    struct NodeCoupling {
+      Vec3 velocity; ///< of the fluid at the node, MD units
+      Vec3 impulse;  ///< this pass's deposit, field units (see add_field_impulse)
+    };
+    std::vector<NodeCoupling> node_coupling;
+    std::vector<Stencil> stencils;              ///< per particle of the current pass
+    std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
+  /** For each node n of the ledger's current pass (`node`, in increasing
+   *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
+   *  with the populations of nodes further down the list prefetched. */
+  void compute_coupling_velocities();
 
   // --- output -----------------------------------------------------------------
   void write_vtk_velocity(const std::string& path) const;
@@ -246,6 +287,11 @@ private:
   /// (node-major: one cache line per deposit; the kernel reads it per block)
   std::vector<double> m_field;
   bool m_field_used = false;
+  /// one flag per chunk of 2^field_chunk_bits padded nodes: some node of the
+  /// chunk has a deposit in m_field (the update reads and clears only those
+  /// blocks, so a few cells in a large box cost little)
+  static constexpr int field_chunk_bits = 6;
+  std::vector<std::uint8_t> m_field_chunk;
   std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)
   std::vector<BoundarySpec> m_boundaries;
   std::vector<Run> m_runs;

@@ -192,6 +192,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   // the coupling's force field is read once and cleared in the same pass
   // (solid nodes keep theirs, which nothing reads; rebuild_geometry clears all)
   double* __restrict g = with_field ? m_field.data() : nullptr;
+  const std::uint8_t* chunk = with_field ? m_field_chunk.data() : nullptr;
   const std::size_t begin = r.start, end = r.start + r.length;
   // a node out of range: its moments, recomputed from the populations that
   // are still unwritten (the caller throws, the update is abandoned)
@@ -230,7 +231,9 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         force[1][i] = fy;
         force[2][i] = fz;
       }
-      if constexpr (with_field) {
+      // only chunks that received a deposit hold a non-zero field
+      if (with_field &&
+          (chunk[b0 >> field_chunk_bits] | chunk[(b0 + len - 1) >> field_chunk_bits])) {
         double* __restrict gb = g + 3 * b0;
         for (int i = 0; i < len; ++i) {
           force[0][i] += gb[3 * i];
@@ -283,7 +286,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
       for (int q = 0; q < Q; ++q)
         fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
       double F[3] = {fx, fy, fz};
-      if constexpr (with_field) {
+      if (with_field && chunk[n >> field_chunk_bits]) {
         for (int d = 0; d < 3; ++d) {
           F[d] += g[3 * n + d];
           g[3 * n + d] = 0.0;
@@ -462,7 +465,10 @@ void LBFluid::step() {
   m_swapped = even;
   halo_exchange(f, even);
   apply_bounce_back(f);
-  m_field_used = false; // the kernel cleared the field of every fluid node
+  if (field) { // the kernel cleared the field of every fluid node in a marked chunk
+    std::fill(m_field_chunk.begin(), m_field_chunk.end(), std::uint8_t{0});
+    m_field_used = false;
+  }
   ++m_updates;
 }
 
