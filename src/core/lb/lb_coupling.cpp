@@ -33,7 +33,13 @@ inline int wrap_node(int i, int n) {
 
 using CompactStencil = LBFluid::CouplingLedger::Stencil;
 
-CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
+[[noreturn]] __attribute__((noinline, cold)) void throw_bad_position(const Vec3& pos) {
+  throw SimulationInstability("lattice-Boltzmann coupling: particle position (" +
+                              std::to_string(pos[0]) + ", " + std::to_string(pos[1]) + ", " +
+                              std::to_string(pos[2]) + ") is not finite or far outside the box");
+}
+
+inline CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
   const double inv_agrid = 1.0 / fluid.agrid();
   const Vec3i& n = fluid.grid();
   int lo[3];
@@ -41,10 +47,7 @@ CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
   for (int d = 0; d < 3; ++d) {
     const double x = pos[d] * inv_agrid - 0.5;
     if (!(std::abs(x) < 1e9)) // NaN or flown away: no index to compute
-      throw SimulationInstability("lattice-Boltzmann coupling: particle position (" +
-                                  std::to_string(pos[0]) + ", " + std::to_string(pos[1]) + ", " +
-                                  std::to_string(pos[2]) +
-                                  ") is not finite or far outside the box");
+      throw_bad_position(pos);
     const double fl = std::floor(x);
     s.frac[d] = x - fl;
     lo[d] = wrap_node(static_cast<int>(fl), n[d]);
