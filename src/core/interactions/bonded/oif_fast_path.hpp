@@ -241,10 +241,8 @@ public:
   bool run(const OifLocalForces& local_ia, const BondGroup& local, const OifGlobalForces& global_ia,
            const BondGroup& global, bool write_normals, ParticleStore& p, const BoxGeometry& box);
 
-  /** Number of (re)builds so far, and whether the last one paired the groups
-   *  up (tests: the fused pass is the one taken). */
+  /** Number of (re)builds so far (as FastBondPlan::n_builds). */
   std::size_t n_builds() const { return m_n_builds; }
-  bool fused() const { return m_usable; }
 
 private:
   bool build(const BondGroup& local, const BondGroup& global, const ParticleStore& p);
