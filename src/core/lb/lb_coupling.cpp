@@ -108,49 +108,77 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   ledger.last_position.resize(n);
   ledger.last_impulse.resize(n);
   // Four passes: (1) stencils, numbering the lattice nodes they need in the
-  // order the particles first touch them; (2) those nodes' velocities,
-  // computed in memory order; (3) per particle the force, its impulse
-  // spread over the nodes' compact entries; (4) the impulses into the
-  // fluid's force field, in memory order. The numbering keeps the entries a
-  // cell's nodes use together (a cell's particles are contiguous), so pass 3
-  // runs from L1 instead of jumping through the lattice-ordered arrays.
+  // order the particles first touch them; (2) those nodes' velocities; (3)
+  // per particle the force, its impulse spread over the nodes' compact
+  // entries; (4) the impulses into the fluid's force field. The numbering
+  // keeps the entries a cell's nodes use together (a cell's particles are
+  // contiguous), so pass 3 runs from L1 instead of jumping through
+  // lattice-ordered arrays. It is kept from step to step: a particle whose
+  // stencil did not move (most, as they move a small fraction of agrid per
+  // step) keeps its entries, one that moved looks up or appends its nodes.
+  // The set is rebuilt from scratch (dropping nodes no longer used, nodes
+  // listed in memory order again) every `renumber_interval` steps and when
+  // the particles change. Every entry accumulates the same deposits in the
+  // same particle order either way, so the results do not depend on it.
+  constexpr std::uint64_t renumber_interval = 64;
   const std::size_t n_words = (fluid.n_padded_slots() + 63) / 64;
   if (ledger.needed.size() != n_words) {
     ledger.needed.assign(n_words, 0);
     ledger.compact.assign(fluid.n_padded_slots(), 0);
+    ledger.node.clear();
+    ledger.stencils.clear();
   }
-  ledger.stencils.resize(n);
-  ledger.stencil_entries.resize(8 * n);
-  CompactStencil* const stencils = ledger.stencils.data();
-  std::uint32_t* const entries = ledger.stencil_entries.data();
   std::uint64_t* const needed = ledger.needed.data();
   std::uint32_t* const compact = ledger.compact.data();
-  std::uint32_t n_nodes = 0;
+  const bool renumber = ledger.stencils.size() != n || ledger.layout_version != p.layout_version ||
+                        step < ledger.numbered_step ||
+                        step - ledger.numbered_step >= renumber_interval;
+  if (renumber) {
+    for (const std::size_t node : ledger.node)
+      needed[node >> 6] = 0;
+    ledger.node.clear();
+    ledger.stencils.resize(n);
+    ledger.stencil_entries.resize(8 * n);
+    ledger.layout_version = p.layout_version;
+    ledger.numbered_step = step;
+  }
+  CompactStencil* const stencils = ledger.stencils.data();
+  std::uint32_t* const entries = ledger.stencil_entries.data();
+  const std::size_t n_listed = ledger.node.size();
+  std::uint32_t n_nodes = static_cast<std::uint32_t>(n_listed);
+  ledger.node.resize(n_listed + 8 * n + 1); // room for every node to be new
+  std::size_t* node_list = ledger.node.data();
   for (std::size_t i = 0; i < n; ++i) {
-    stencils[i] = compact_stencil(fluid, p.pos[i]);
+    const CompactStencil s = compact_stencil(fluid, p.pos[i]);
+    const CompactStencil& old = stencils[i];
+    const bool moved = renumber || s.base != old.base || s.step[0] != old.step[0] ||
+                       s.step[1] != old.step[1] || s.step[2] != old.step[2];
+    stencils[i] = s;
+    if (!moved)
+      continue;
     for (int m = 0; m < 8; ++m) {
-      const std::size_t node = stencils[i].node(m);
+      const std::size_t node = s.node(m);
       // branch-free: whether a node is new is as good as random
       const std::uint64_t word = needed[node >> 6], bit = std::uint64_t{1} << (node & 63);
       const bool is_new = !(word & bit);
       needed[node >> 6] = word | bit;
       const std::uint32_t entry = is_new ? n_nodes : compact[node];
       compact[node] = entry;
+      node_list[n_nodes] = node; // kept only if new
       n_nodes += is_new;
       entries[8 * i + m] = entry;
     }
   }
+  // after a renumbering the list is rewritten in memory order (the velocity
+  // pass then reads the 19 population streams forwards); otherwise new
+  // nodes were appended in the order of their entries
   ledger.node.resize(n_nodes);
-  std::size_t* const lattice_order = ledger.node.data();
-  for (std::size_t word = 0, j = 0; word < n_words; ++word) {
-    std::uint64_t bits = needed[word];
-    if (!bits)
-      continue;
-    needed[word] = 0;
-    do {
-      lattice_order[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
-      bits &= bits - 1;
-    } while (bits);
+  node_list = ledger.node.data();
+  if (renumber) {
+    std::size_t j = 0;
+    for (std::size_t word = 0; word < n_words; ++word)
+      for (std::uint64_t bits = needed[word]; bits; bits &= bits - 1)
+        node_list[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
   }
   fluid.compute_coupling_velocities();
   auto* const state = ledger.node_coupling.data();
@@ -184,7 +212,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     impulse_sum += impulse;
   }
   for (std::size_t j = 0; j < n_nodes; ++j) {
-    const std::size_t node = lattice_order[j];
+    const std::size_t node = node_list[j];
     fluid.add_field_impulse(node, state[compact[node]].impulse);
   }
   ledger.in_flight = 0.5 * impulse_sum;

@@ -197,10 +197,11 @@ public:
                ((m & 4) ? frac[2] : 1.0 - frac[2]);
       }
     };
-    /// The lattice nodes of the current coupling pass: marked in `needed`
-    /// (one bit per padded node), numbered in the order the particles'
-    /// stencils first touch them (compact[n], stale for unmarked nodes,
-    /// which are never looked up), and listed in memory order in `node`.
+    /// The lattice nodes of the coupling passes since the last renumbering:
+    /// marked in `needed` (one bit per padded node), numbered in the order
+    /// the particles' stencils first touched them (compact[n], stale for
+    /// unmarked nodes, which are never looked up), listed in `node` by
+    /// number (see couple_particles).
     /// Each lattice node serves several membrane nodes, and its 19
     /// populations lie in 19 different streams, so its velocity is computed
     /// once per pass, in memory order, into its compact entry.
@@ -212,11 +213,12 @@ public:
       Vec3 impulse;  ///< this pass's deposit, field units (see add_field_impulse)
     };
     std::vector<NodeCoupling> node_coupling;
-    std::vector<Stencil> stencils;              ///< per particle of the current pass
-    std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
+    std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
+    std::vector<Stencil> stencils;                       ///< per particle of the current pass
+    std::vector<std::uint32_t> stencil_entries;          ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
-  /** For each node n of the ledger's current pass (`node`, in increasing
+  /** For each node n of the ledger's list (`node`, mostly in increasing
    *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
    *  with the populations of nodes further down the list prefetched. */
   void compute_coupling_velocities();

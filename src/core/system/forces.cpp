@@ -260,7 +260,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (n_steps < 0)
     throw InputError("steps must be a non-negative integer, got " + std::to_string(n_steps));
   if (lb) {
-    set_time_step(m_time_step);  // re-checks tau against the time step
+    set_time_step(m_time_step); // re-checks tau against the time step
     lb->validate(box, m_time_step);
   }
   auto& p = particles;
@@ -268,28 +268,41 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     compute_forces();
   const double dt = m_time_step;
   const int lb_interval = lb_steps_per_update();
-  for (int step = 0; step < n_steps; ++step) {
-    // velocity Verlet, first half kick + drift
-    for (std::size_t i = 0; i < p.n_local(); ++i) {
-      const double half_dt_over_m = 0.5 * dt / p.mass[i];
+  // Velocity Verlet. The half kick dt / 2m per particle is computed once per
+  // run (mass, fixed flags and order do not change during it); without fixed
+  // coordinates the loops are branch- and division-free and vectorise.
+  const std::size_t n = p.n_local();
+  std::vector<double> half_kick(n);
+  bool any_fixed = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    half_kick[i] = 0.5 * dt / p.mass[i];
+    any_fixed |= p.fixed[i] != 0;
+  }
+  auto kick = [&](bool and_drift) {
+    if (!any_fixed) {
+      for (std::size_t i = 0; i < n; ++i)
+        p.vel[i] += half_kick[i] * p.force[i];
+      if (and_drift)
+        for (std::size_t i = 0; i < n; ++i)
+          p.pos[i] += dt * p.vel[i];
+      return;
+    }
+    for (std::size_t i = 0; i < n; ++i)
       for (int d = 0; d < 3; ++d) {
         if (p.fixed[i] & (1u << d))
-          continue;
-        p.vel[i][d] += half_dt_over_m * p.force[i][d];
-        p.pos[i][d] += dt * p.vel[i][d];
+          continue; // neither kicked nor moved
+        p.vel[i][d] += half_kick[i] * p.force[i][d];
+        if (and_drift)
+          p.pos[i][d] += dt * p.vel[i][d];
       }
-    }
+  };
+  for (int step = 0; step < n_steps; ++step) {
+    kick(true); // first half kick + drift
     ++step_count;
     time += dt;
     prepare_step();
     force_loop<false>(nullptr);
-    // second half kick
-    for (std::size_t i = 0; i < p.n_local(); ++i) {
-      const double half_dt_over_m = 0.5 * dt / p.mass[i];
-      for (int d = 0; d < 3; ++d)
-        if (!(p.fixed[i] & (1u << d)))
-          p.vel[i][d] += half_dt_over_m * p.force[i][d];
-    }
+    kick(false); // second half kick
     if (lb && ++m_lb_substep >= lb_interval) {
       m_lb_substep = 0;
       lb->step();
@@ -298,4 +311,4 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   m_forces_valid = true;
 }
 
-}  // namespace pyoif
+} // namespace pyoif
