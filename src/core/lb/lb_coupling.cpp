@@ -125,7 +125,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (ledger.needed.size() != n_words) {
     ledger.needed.assign(n_words, 0);
     ledger.compact.assign(fluid.n_padded_slots(), 0);
-    ledger.node.clear();
+    ledger.n_nodes = 0;
     ledger.stencils.clear();
   }
   std::uint64_t* const needed = ledger.needed.data();
@@ -134,9 +134,9 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                         step < ledger.numbered_step ||
                         step - ledger.numbered_step >= renumber_interval;
   if (renumber) {
-    for (const std::size_t node : ledger.node)
-      needed[node >> 6] = 0;
-    ledger.node.clear();
+    for (std::size_t j = 0; j < ledger.n_nodes; ++j)
+      needed[ledger.node[j] >> 6] = 0;
+    ledger.n_nodes = 0;
     ledger.stencils.resize(n);
     ledger.stencil_entries.resize(8 * n);
     ledger.layout_version = p.layout_version;
@@ -144,9 +144,10 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   }
   CompactStencil* const stencils = ledger.stencils.data();
   std::uint32_t* const entries = ledger.stencil_entries.data();
-  const std::size_t n_listed = ledger.node.size();
+  const std::size_t n_listed = ledger.n_nodes;
   std::uint32_t n_nodes = static_cast<std::uint32_t>(n_listed);
-  ledger.node.resize(n_listed + 8 * n + 1); // room for every node to be new
+  if (ledger.node.size() < n_listed + 8 * n + 1) // room for every node to be new
+    ledger.node.resize(n_listed + 8 * n + 1);
   std::size_t* node_list = ledger.node.data();
   for (std::size_t i = 0; i < n; ++i) {
     const CompactStencil s = compact_stencil(fluid, p.pos[i]);
@@ -172,8 +173,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   // after a renumbering the list is rewritten in memory order (the velocity
   // pass then reads the 19 population streams forwards); otherwise new
   // nodes were appended in the order of their entries
-  ledger.node.resize(n_nodes);
-  node_list = ledger.node.data();
+  ledger.n_nodes = n_nodes;
   if (renumber) {
     std::size_t j = 0;
     for (std::size_t word = 0; word < n_words; ++word)

@@ -365,28 +365,6 @@ std::size_t LBFluid::padded_index(int i, int j, int k) const {
   return index(wrap(i, m_n[0]) + 1, wrap(j, m_n[1]) + 1, wrap(k, m_n[2]) + 1);
 }
 
-void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
-  // also the coupling's hot path (velocity_at_index): the 19 loads with the
-  // layout's offsets, the velocity components known at compile time after
-  // unrolling, so the zero ones drop out
-  const std::ptrdiff_t* off = read_offset();
-  const double* f = m_f + n;
-  double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
-#pragma GCC unroll 19
-  for (int q = 0; q < Q; ++q) {
-    const double v = f[off[q]];
-    r += v;
-    if (c[q][0])
-      jx += c[q][0] * v;
-    if (c[q][1])
-      jy += c[q][1] * v;
-    if (c[q][2])
-      jz += c[q][2] * v;
-  }
-  rho = r;
-  j = Vec3(jx, jy, jz);
-}
-
 int LBFluid::node_boundary(const Vec3i& node) const {
   return static_cast<int>(m_flag[checked_node(node)]) - 1;
 }
@@ -399,17 +377,6 @@ double LBFluid::node_density(const Vec3i& node) const {
   Vec3 j;
   moments(n, rho, j);
   return rho;
-}
-
-Vec3 LBFluid::velocity_at_index(std::size_t n) const {
-  if (m_flag[n])
-    return m_boundaries[m_flag[n] - 1].velocity;
-  double rho;
-  Vec3 j;
-  moments(n, rho, j);
-  const double scale = m_p.agrid / m_p.tau / rho;
-  return Vec3((j[0] + 0.5 * m_ext_lattice[0]) * scale, (j[1] + 0.5 * m_ext_lattice[1]) * scale,
-              (j[2] + 0.5 * m_ext_lattice[2]) * scale);
 }
 
 Vec3 LBFluid::node_velocity(const Vec3i& node) const {
@@ -484,7 +451,7 @@ void LBFluid::compute_coupling_velocities() {
   constexpr std::size_t ahead = 16;
   const std::ptrdiff_t* off = read_offset();
   const std::size_t* nodes = m_ledger.node.data();
-  const std::size_t count = m_ledger.node.size();
+  const std::size_t count = m_ledger.n_nodes;
   m_ledger.node_coupling.resize(count);
   auto* out = m_ledger.node_coupling.data();
   const std::uint32_t* entry = m_ledger.compact.data();

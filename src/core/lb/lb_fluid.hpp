@@ -144,7 +144,7 @@ public:
   /** Number of padded node slots (bound of every padded index). */
   std::size_t n_padded_slots() const { return m_stride; }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
-  Vec3 velocity_at_index(std::size_t n) const;
+  inline Vec3 velocity_at_index(std::size_t n) const;
   /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
   void add_impulse(std::size_t n, const Vec3& impulse);
   /** Bulk deposits: open_impulse_field() switches the force field on for the
@@ -207,7 +207,8 @@ public:
     /// once per pass, in memory order, into its compact entry.
     std::vector<std::uint64_t> needed;
     std::vector<std::uint32_t> compact;
-    std::vector<std::size_t> node;
+    std::vector<std::size_t> node; ///< the first n_nodes are the list (the rest: room)
+    std::size_t n_nodes = 0;
     struct NodeCoupling {
       Vec3 velocity; ///< of the fluid at the node, MD units
       Vec3 impulse;  ///< this pass's deposit, field units (see add_field_impulse)
@@ -276,7 +277,7 @@ private:
   template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
   bool update_run(const Run& r, double* f, BadNode& bad);
   [[noreturn]] void report_instability(const BadNode& bad) const;
-  void moments(std::size_t n, double& rho, Vec3& j) const;
+  inline void moments(std::size_t n, double& rho, Vec3& j) const;
 
   LBParams m_p;
   Relaxation m_relax{};
@@ -322,5 +323,39 @@ private:
   CouplingLedger m_ledger;
   int m_threads = 1;
 };
+
+// Inline: the coupling's velocity pass calls these once per lattice node it
+// needs, so the 19 sums belong in its loop.
+inline void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
+  // the 19 loads with the layout's offsets, the velocity components known at
+  // compile time after unrolling, so the zero ones drop out
+  const std::ptrdiff_t* off = read_offset();
+  const double* f = m_f + n;
+  double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
+#pragma GCC unroll 19
+  for (int q = 0; q < d3q19::Q; ++q) {
+    const double v = f[off[q]];
+    r += v;
+    if (d3q19::c[q][0])
+      jx += d3q19::c[q][0] * v;
+    if (d3q19::c[q][1])
+      jy += d3q19::c[q][1] * v;
+    if (d3q19::c[q][2])
+      jz += d3q19::c[q][2] * v;
+  }
+  rho = r;
+  j = Vec3(jx, jy, jz);
+}
+
+inline Vec3 LBFluid::velocity_at_index(std::size_t n) const {
+  if (m_flag[n])
+    return m_boundaries[m_flag[n] - 1].velocity;
+  double rho;
+  Vec3 j;
+  moments(n, rho, j);
+  const double scale = m_p.agrid / m_p.tau / rho;
+  return Vec3((j[0] + 0.5 * m_ext_lattice[0]) * scale, (j[1] + 0.5 * m_ext_lattice[1]) * scale,
+              (j[2] + 0.5 * m_ext_lattice[2]) * scale);
+}
 
 } // namespace pyoif::lb
