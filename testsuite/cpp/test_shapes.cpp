@@ -413,3 +413,38 @@ TEST(Union, SkippingFarMembersChangesNothing) {
     ASSERT_EQ(r.normal, best_normal);
   }
 }
+
+TEST(Shapes, BatchDistancesExactWithinRange) {
+  // signed_distances (the constraints' loop) must give the exact distance
+  // below the range and a value >= range beyond it, for every shape (walls
+  // take their own tight loop, bounded shapes skip far points by their box)
+  auto cases = random_cases();
+  cases.push_back({"wall", std::make_shared<Wall>(Vec3(0.3, -1, 0.4), 0.7), true, true});
+  constexpr std::size_t n = 4000;
+  std::vector<Vec3> points(n);
+  for (std::uint64_t i = 0; i < n; ++i)
+    points[i] = random_point(i, 3.0);
+  int total_within = 0, total_beyond = 0;
+  for (const auto& cs : cases) {
+    SCOPED_TRACE(cs.label);
+    for (const double range : {0.25, 1.0}) {
+      std::vector<double> dist(n);
+      cs.shape->signed_distances(points.data(), n, range, dist.data());
+      int within = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double exact = eval(*cs.shape, points[i]).dist;
+        if (exact < range) {
+          ++within;
+          ASSERT_EQ(dist[i], exact) << "at " << points[i].transpose();
+        } else {
+          ASSERT_GE(dist[i], range) << "at " << points[i].transpose();
+        }
+      }
+      total_within += within;
+      total_beyond += static_cast<int>(n) - within;
+    }
+  }
+  // both branches occur often (complements have nearly all points within)
+  EXPECT_GT(total_within, 20000);
+  EXPECT_GT(total_beyond, 20000);
+}

@@ -6,6 +6,7 @@
 #include "utils/vector.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 namespace pyoif::shapes {
@@ -41,6 +42,25 @@ public:
    *  distance is at least box_distance(pos, lo, hi), which lets the
    *  constraints and unions skip the exact distance of far points. */
   virtual bool bounding_box(Vec3& /*lo*/, Vec3& /*hi*/) const { return false; }
+  /** Signed distances of n points for the constraints' loop: dist[i] is the
+   *  exact signed distance where it is below `range` (> 0) and otherwise any
+   *  value >= range. The default skips the exact distance of points farther
+   *  than range from the bounding box; shapes with a cheap distance override
+   *  it with one tight loop (no virtual call per point). */
+  virtual void signed_distances(const Vec3* pos, std::size_t n, double range, double* dist) const {
+    Vec3 lo, hi, normal;
+    const bool bounded = bounding_box(lo, hi);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (bounded) {
+        const double lower_bound = box_distance(pos[i], lo, hi);
+        if (lower_bound >= range) {
+          dist[i] = lower_bound;
+          continue;
+        }
+      }
+      calc_dist(pos[i], dist[i], normal);
+    }
+  }
   /** True when pos is certainly farther than `range` (> 0) from the solid. */
   bool farther_than(const Vec3& pos, double range) const {
     Vec3 lo, hi;

@@ -13,6 +13,11 @@ public:
     dist = pos.dot(m_normal) - m_dist;
     normal = m_normal;
   }
+  void signed_distances(const Vec3* pos, std::size_t n, double /*range*/,
+                        double* dist) const override {
+    for (std::size_t i = 0; i < n; ++i)
+      dist[i] = pos[i].dot(m_normal) - m_dist;
+  }
   std::string name() const override { return "Wall"; }
   const Vec3& normal() const { return m_normal; }
   double dist() const { return m_dist; }

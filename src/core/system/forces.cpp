@@ -162,28 +162,30 @@ void System::add_constraint_forces(Energies* e) {
   c.wall = true;
   c.mol_j = -1;
   c.normal_j = Vec3::Zero();
+  // the largest range of any pair: beyond it no constraint acts
+  const double range = nonbonded.max_range();
+  std::vector<double>& dist = m_constraint_dist;
+  dist.resize(p.n_local());
   for (auto& constraint : constraints) {
     constraint->total_force.setZero();
-    // a bounded shape (a block, a sphere...) is skipped by the particles
-    // farther from its bounding box than the interaction range: they feel no
-    // force and cannot have penetrated, and the box test is a few compares
-    // against an exact distance that may cost a hundred times more
-    Vec3 box_lo, box_hi;
-    const bool bounded = constraint->shape->bounding_box(box_lo, box_hi);
+    // all distances in one call (a tight loop for walls; bounded shapes skip
+    // the exact distance of particles farther than the range from their
+    // bounding box), the force where a particle is within its pair's range
+    constraint->shape->signed_distances(p.pos.data(), p.n_local(), range, dist.data());
     for (std::size_t i = 0; i < p.n_local(); ++i) {
+      if (dist[i] >= range)
+        continue;
       const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
       if (!params)
         continue;
-      if (bounded && shapes::box_distance(p.pos[i], box_lo, box_hi) >= params->range)
-        continue;
-      double dist;
-      Vec3 normal;
-      constraint->shape->calc_dist(p.pos[i], dist, normal);
-      if (dist > 0.0) {
-        if (dist >= params->range)
+      if (dist[i] > 0.0) {
+        if (dist[i] >= params->range)
           continue;
-        c.d = dist * normal;
-        c.dist = dist;
+        double exact;
+        Vec3 normal;
+        constraint->shape->calc_dist(p.pos[i], exact, normal);
+        c.d = exact * normal;
+        c.dist = exact;
         c.mol_i = p.mol_id[i];
         c.normal_i = p.normal[i];
         const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
@@ -193,7 +195,7 @@ void System::add_constraint_forces(Energies* e) {
         std::ostringstream msg;
         msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
             << ") penetrated the non-penetrable " << constraint->shape->name()
-            << " constraint (signed distance " << dist << ") at time " << time
+            << " constraint (signed distance " << dist[i] << ") at time " << time
             << "; strengthen the node-wall interaction or reduce the time step";
         throw SimulationInstability(msg.str());
       }

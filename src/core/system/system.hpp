@@ -42,7 +42,7 @@ struct BondedEntry {
 
 struct Energies {
   double kinetic = 0.0, bonded = 0.0, non_bonded = 0.0;
-  std::map<int, double> bonded_by_id;  ///< per bonded interaction id
+  std::map<int, double> bonded_by_id; ///< per bonded interaction id
   double total() const { return kinetic + bonded + non_bonded; }
 };
 
@@ -57,7 +57,7 @@ public:
   double time_step() const { return m_time_step; }
   void set_time_step(double dt);
   double time = 0.0;
-  std::uint64_t step_count = 0;  ///< MD steps done (RNG counter)
+  std::uint64_t step_count = 0; ///< MD steps done (RNG counter)
   void set_box_l(const Vec3& l);
   void set_periodicity(const std::array<bool, 3>& p);
 
@@ -74,7 +74,7 @@ public:
   // --- interactions -----------------------------------------------------------
   NonbondedTable nonbonded;
   void on_interactions_changed() { cells.invalidate(); }
-  std::vector<BondedEntry> bonded;  ///< index = bonded interaction id
+  std::vector<BondedEntry> bonded; ///< index = bonded interaction id
   int add_bonded_interaction(const BondedInteraction& ia);
   /** Adds bonds of interaction `bond_id`: ids is n_bonds * n_particles ids,
    *  per_bond the per-bond reference values (or empty). */
@@ -101,13 +101,14 @@ public:
   int lb_steps_per_update() const;
 
 private:
-  void prepare_step();  ///< re-sort if needed and update ghosts
+  void prepare_step(); ///< re-sort if needed and update ghosts
   template <bool with_energy> void force_loop(Energies* e);
   void add_bonded_forces(Energies* e);
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
   void add_langevin_forces();
-  std::vector<oif::FastBondPlan> m_fast_plans;  ///< per bonded interaction id
+  std::vector<oif::FastBondPlan> m_fast_plans; ///< per bonded interaction id
+  std::vector<double> m_constraint_dist;       ///< per particle, one constraint at a time
   /** Per OifLocalForces id: that group fused with its cell type's
    *  OifGlobalForces group (add_bonded_forces). */
   std::vector<oif::FusedMembranePlan> m_fused_plans;
@@ -116,4 +117,4 @@ private:
   int m_lb_substep = 0;
 };
 
-}  // namespace pyoif
+} // namespace pyoif
