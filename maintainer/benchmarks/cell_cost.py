@@ -3,7 +3,7 @@
 RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
 0 / 5 / 20 / 60 cells on one core, and the time to create one cell.
 
-    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--steps 300] [--cells 0 5 20 60]
+    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--steps 200] [--repeats 5] [--cells 0 5 20 60]
         [--csv cell_cost.csv] [--no-fluid]
 
 Scene (as the ESPResSo 4.2.2 timing in reference/model.md): channel
@@ -61,18 +61,23 @@ def build(n_cells, fluid, seed=1):
     return system, rbc
 
 
-def time_run(system, steps, repeats):
-    """(CPU seconds, wall seconds) per 1000 steps, best of `repeats`. CPU time
-    of this process is the paper's measure (its Table 1) and, on one thread,
-    does not count time the process waited for a core on a shared machine."""
-    system.integrator.run(20)  # warm up: neighbour lists, caches
-    best_cpu = best_wall = np.inf
+def time_runs(systems, steps, repeats):
+    """Per system (CPU seconds, wall seconds) per 1000 steps, best of
+    `repeats`. The systems take turns (one timed run each per round), so a
+    slow spell of a shared machine hits every configuration alike instead of
+    one of them. CPU time of this process is the paper's measure (its Table
+    1) and, on one thread, does not count time the process waited for a core."""
+    for system in systems:
+        system.integrator.run(20)  # warm up: neighbour lists, caches
+    best_cpu = [np.inf] * len(systems)
+    best_wall = [np.inf] * len(systems)
     for _ in range(repeats):
-        c, t = time.process_time(), time.perf_counter()
-        system.integrator.run(steps)
-        best_cpu = min(best_cpu, time.process_time() - c)
-        best_wall = min(best_wall, time.perf_counter() - t)
-    return best_cpu * 1000.0 / steps, best_wall * 1000.0 / steps
+        for k, system in enumerate(systems):
+            c, t = time.process_time(), time.perf_counter()
+            system.integrator.run(steps)
+            best_cpu[k] = min(best_cpu[k], time.process_time() - c)
+            best_wall[k] = min(best_wall[k], time.perf_counter() - t)
+    return [(cpu * 1000.0 / steps, wall * 1000.0 / steps) for cpu, wall in zip(best_cpu, best_wall)]
 
 
 def creation_time(repeats=20):
@@ -91,8 +96,9 @@ def creation_time(repeats=20):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--steps", type=int, default=300, help="timed MD steps per configuration")
-    ap.add_argument("--repeats", type=int, default=2, help="timed runs per configuration (best counts)")
+    ap.add_argument("--steps", type=int, default=200, help="MD steps per timed run")
+    ap.add_argument("--repeats", type=int, default=5,
+                    help="rounds: timed runs per configuration, taken in turns (best counts)")
     ap.add_argument("--cells", type=int, nargs="+", default=[0, 5, 20, 60])
     ap.add_argument("--no-fluid", action="store_true", help="Langevin instead of LB (membrane cost alone)")
     ap.add_argument("--csv", default="cell_cost.csv")
@@ -105,9 +111,8 @@ def main():
           f"wall seconds grow with the load)")
     rows = []
     base = None
-    for n in args.cells:
-        system, _ = build(n, fluid=not args.no_fluid)
-        s1000, wall1000 = time_run(system, args.steps, args.repeats)
+    systems = [build(n, fluid=not args.no_fluid)[0] for n in args.cells]
+    for n, (s1000, wall1000) in zip(args.cells, time_runs(systems, args.steps, args.repeats)):
         if n == 0:
             base = s1000
         extra = (s1000 - base) / n if (n and base is not None) else float("nan")
