@@ -110,6 +110,26 @@ struct EdgeBlock {
  *  blk: sets the forces fa..fd (fa, fd zero without wings) and, with wings,
  *  the wing normals n1, n2 and their squared lengths. False on a zero-length
  *  edge or (wings) a degenerate wing triangle: the generic loop must speak. */
+/** A cell's area (sum of its triangles' areas) and volume (eqs. 6, 7: sum of
+ *  a.N / 6), from per-triangle arrays: four partial sums, so that there is
+ *  no loop-carried chain of additions. */
+void cell_area_volume(const double* area, const double* vol, int n, double& cell_area,
+                      double& cell_volume) {
+  double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
+  int k = 0;
+  for (; k + 4 <= n; k += 4)
+    for (int j = 0; j < 4; ++j) {
+      sa[j] += area[k + j];
+      sv[j] += vol[k + j];
+    }
+  for (; k < n; ++k) {
+    sa[0] += area[k];
+    sv[0] += vol[k];
+  }
+  cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
+  cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
+}
+
 bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* inv_r0,
                        const double* cos_psi0, const double* sin_psi0, const OifLocalForces& ia,
                        bool wings) {
@@ -757,20 +777,8 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     }
     if (bad)
       return false;
-    // four partial sums: no loop-carried chain of additions
-    double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
-    int k = 0;
-    for (; k + 4 <= n; k += 4)
-      for (int j = 0; j < 4; ++j) {
-        sa[j] += area[k + j];
-        sv[j] += vol[k + j];
-      }
-    for (; k < n; ++k) {
-      sa[0] += area[k];
-      sv[0] += vol[k];
-    }
-    const double cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
-    const double cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
+    double cell_area, cell_volume;
+    cell_area_volume(area, vol, n, cell_area, cell_volume);
     if (!(cell_area > 0.0))
       return false;
     // volume (eq. 7): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
@@ -1124,20 +1132,8 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   }
   if (bad)
     return false;
-  // the cell's area and volume, four partial sums (no loop-carried chain)
-  double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
-  int k4 = 0;
-  for (; k4 + 4 <= n_tri; k4 += 4)
-    for (int j = 0; j < 4; ++j) {
-      sa[j] += area[k4 + j];
-      sv[j] += vol[k4 + j];
-    }
-  for (; k4 < n_tri; ++k4) {
-    sa[0] += area[k4];
-    sv[0] += vol[k4];
-  }
-  const double cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
-  const double cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
+  double cell_area, cell_volume;
+  cell_area_volume(area, vol, n_tri, cell_area, cell_volume);
   if (!(cell_area > 0.0))
     return false;
   const double ka_g = global_ia.ka_g, kv = global_ia.kv, A0_g = global_ia.A0_g, V0 = global_ia.V0;
