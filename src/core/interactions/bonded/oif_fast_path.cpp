@@ -816,12 +816,9 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
 }
 
 bool FastBondPlan::same_triangles(const BondGroup& own, const BondGroup& source) {
-  const Link now{own.ids.data(), own.ids.size(), source.ids.data(), source.ids.size()};
-  if (!(now == m_link)) {
-    m_link = now;
-    m_link_same = own.n_particles == 3 && source.n_particles == 3 && own.ids == source.ids;
-  }
-  return m_link_same;
+  return m_same_triangles.get(own, source, [&] {
+    return own.n_particles == 3 && source.n_particles == 3 && own.ids == source.ids;
+  });
 }
 
 // ---------------------------------------------------------------------------
@@ -880,18 +877,15 @@ bool FastBondPlan::run(const OifOutDirection&, const BondGroup& group, ParticleS
 // OifLocalForces + OifGlobalForces (+ OifOutDirection normals), fused
 // ---------------------------------------------------------------------------
 bool FusedMembranePlan::same_particles(const BondGroup& local, const BondGroup& global) {
-  const Link now{local.ids.data(), local.ids.size(), global.ids.data(), global.ids.size()};
-  if (!(now == m_link)) {
-    m_link = now;
+  return m_same_particles.get(local, global, [&] {
     auto sorted_unique = [](std::vector<int> ids) {
       std::sort(ids.begin(), ids.end());
       ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
       return ids;
     };
-    m_link_same = local.n_particles == 4 && global.n_particles == 3 && !local.ids.empty() &&
-                  sorted_unique(local.ids) == sorted_unique(global.ids);
-  }
-  return m_link_same;
+    return local.n_particles == 4 && global.n_particles == 3 && !local.ids.empty() &&
+           sorted_unique(local.ids) == sorted_unique(global.ids);
+  });
 }
 
 bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,

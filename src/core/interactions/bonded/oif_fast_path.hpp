@@ -94,6 +94,34 @@ struct GroupKey {
   }
 };
 
+/** The outcome of comparing two bond groups, kept until either group's id
+ *  array changes (its address or length): the pairings in
+ *  System::add_bonded_forces ask every step. */
+class CachedGroupComparison {
+public:
+  template <class Compare> bool get(const BondGroup& a, const BondGroup& b, Compare&& compare) {
+    const Key now{a.ids.data(), a.ids.size(), b.ids.data(), b.ids.size()};
+    if (!(now == m_key)) {
+      m_key = now;
+      m_result = compare();
+    }
+    return m_result;
+  }
+
+private:
+  struct Key {
+    const int* a = nullptr;
+    std::size_t n_a = 0;
+    const int* b = nullptr;
+    std::size_t n_b = 0;
+    bool operator==(const Key& o) const {
+      return a == o.a && n_a == o.n_a && b == o.b && n_b == o.n_b;
+    }
+  };
+  Key m_key;
+  bool m_result = false;
+};
+
 class FastBondPlan {
 public:
   /** Adds the group's forces (writes the node normals for OifOutDirection).
@@ -172,17 +200,7 @@ private:
   /** Adds the slot forces to the particles if all are finite. */
   bool commit_forces(ParticleStore& p) const;
 
-  struct Link {
-    const int* own = nullptr;
-    std::size_t n_own = 0;
-    const int* source = nullptr;
-    std::size_t n_source = 0;
-    bool operator==(const Link& o) const {
-      return own == o.own && n_own == o.n_own && source == o.source && n_source == o.n_source;
-    }
-  };
-  Link m_link;
-  bool m_link_same = false;
+  CachedGroupComparison m_same_triangles;
   bool m_normals_written = false;
   std::vector<Vec3> m_normal; ///< slot -> normal accumulated (write_normals)
 
@@ -256,18 +274,7 @@ private:
   bool evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
                      const OifGlobalForces& global_ia, bool write_normals);
 
-  struct Link {
-    const int* local = nullptr;
-    std::size_t n_local = 0;
-    const int* global = nullptr;
-    std::size_t n_global = 0;
-    bool operator==(const Link& o) const {
-      return local == o.local && n_local == o.n_local && global == o.global &&
-             n_global == o.n_global;
-    }
-  };
-  Link m_link;
-  bool m_link_same = false;
+  CachedGroupComparison m_same_particles;
 
   GroupKey m_local_key, m_global_key;
   bool m_usable = false;
