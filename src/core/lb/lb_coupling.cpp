@@ -12,13 +12,6 @@ namespace pyoif::lb {
 
 namespace {
 
-/** The 8 nodes around pos and their trilinear weights. Node (i, j, k) sits at
- *  ((i, j, k) + 1/2) agrid. */
-struct Stencil {
-  std::array<std::size_t, 8> node;
-  std::array<double, 8> weight;
-};
-
 /** i folded into [0, n): one add or subtract for the usual case (positions
  *  are folded at every re-sort and move less than the skin in between). */
 inline int wrap_node(int i, int n) {
@@ -59,23 +52,15 @@ inline CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
   return s;
 }
 
-Stencil stencil(const LBFluid& fluid, const Vec3& pos) {
-  const CompactStencil c = compact_stencil(fluid, pos);
-  Stencil s;
-  for (int m = 0; m < 8; ++m) {
-    s.node[m] = c.node(m);
-    s.weight[m] = c.weight(m);
-  }
-  return s;
-}
-
 } // namespace
 
 Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
-  const Stencil s = stencil(fluid, box.folded(pos));
+  // the 8 nodes around pos and their trilinear weights; node (i, j, k) sits
+  // at ((i, j, k) + 1/2) agrid
+  const CompactStencil s = compact_stencil(fluid, box.folded(pos));
   Vec3 u = Vec3::Zero();
   for (int m = 0; m < 8; ++m)
-    u += s.weight[m] * fluid.velocity_at_index(s.node[m]);
+    u += s.weight(m) * fluid.velocity_at_index(s.node(m));
   return u;
 }
 
@@ -93,19 +78,18 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   const std::size_t n = p.n_local();
   // the force field is switched on (and read by the next update) only when
   // something is deposited: a fluid without particles keeps the plain kernel
-  if (n > 0 || (same_step && !ledger.last_position.empty()))
+  if (n > 0 || (same_step && !ledger.last_impulse.empty()))
     fluid.open_impulse_field();
   const double scale = fluid.impulse_scale();
-  if (same_step)
-    for (std::size_t i = 0; i < ledger.last_position.size(); ++i) {
-      const Stencil s = stencil(fluid, ledger.last_position[i]);
+  if (same_step) // the last pass's stencils are still in the ledger
+    for (std::size_t i = 0; i < ledger.last_impulse.size(); ++i) {
+      const CompactStencil& s = ledger.stencils[i];
       const Vec3 retract = -0.5 * scale * ledger.last_impulse[i];
       for (int m = 0; m < 8; ++m)
-        fluid.add_field_impulse(s.node[m], s.weight[m] * retract);
+        fluid.add_field_impulse(s.node(m), s.weight(m) * retract);
     }
   ledger.any = true;
   ledger.step = step;
-  ledger.last_position.resize(n);
   ledger.last_impulse.resize(n);
   // Four passes: (1) stencils, numbering the lattice nodes they need in the
   // order the particles first touch them; (2) those nodes' velocities; (3)
@@ -207,7 +191,6 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     const Vec3 spread = (scale * fraction) * impulse;
     for (int m = 0; m < 8; ++m)
       state[k[m]].impulse += weight[m] * spread;
-    ledger.last_position[i] = p.pos[i];
     ledger.last_impulse[i] = impulse;
     impulse_sum += impulse;
   }

@@ -360,11 +360,6 @@ std::size_t LBFluid::checked_node(const Vec3i& node) const {
   return index(node[0] + 1, node[1] + 1, node[2] + 1);
 }
 
-std::size_t LBFluid::padded_index(int i, int j, int k) const {
-  auto wrap = [](int v, int n) { return ((v % n) + n) % n; };
-  return index(wrap(i, m_n[0]) + 1, wrap(j, m_n[1]) + 1, wrap(k, m_n[2]) + 1);
-}
-
 int LBFluid::node_boundary(const Vec3i& node) const {
   return static_cast<int>(m_flag[checked_node(node)]) - 1;
 }
@@ -436,12 +431,6 @@ void LBFluid::open_impulse_field() {
     m_field_chunk.assign((m_stride >> field_chunk_bits) + 1, 0);
   }
   m_field_used = true;
-}
-
-void LBFluid::add_impulse(std::size_t n, const Vec3& impulse) {
-  open_impulse_field();
-  // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
-  add_field_impulse(n, impulse * impulse_scale());
 }
 
 void LBFluid::compute_coupling_velocities() {

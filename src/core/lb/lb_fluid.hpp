@@ -133,8 +133,6 @@ public:
   void set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u);
 
   // --- particle coupling (lattice indices are padded node indices) -----------
-  /** Padded index of lattice node (i, j, k), folded periodically. */
-  std::size_t padded_index(int i, int j, int k) const;
   /** Padded index of a node already in [0, N) on every axis (no folding). */
   std::size_t padded_index_in_box(int i, int j, int k) const { return index(i + 1, j + 1, k + 1); }
   /** Difference of the padded indices of neighbours along axis d. */
@@ -145,15 +143,14 @@ public:
   std::size_t n_padded_slots() const { return m_stride; }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
   inline Vec3 velocity_at_index(std::size_t n) const;
-  /** Adds an impulse (momentum, MD units) to the node, applied at the next update. */
-  void add_impulse(std::size_t n, const Vec3& impulse);
   /** Bulk deposits: open_impulse_field() switches the force field on for the
    *  next update (allocating it on first use); then add_field_impulse(n, p)
    *  adds p = impulse (MD units) * impulse_scale() at padded index n. */
   void open_impulse_field();
   double impulse_scale() const {
     const double a2 = m_p.agrid * m_p.agrid;
-    return m_p.tau / (a2 * a2); // momentum-density change per update, lattice units
+    // momentum-density change per update in lattice units: p / agrid^3 * tau / agrid
+    return m_p.tau / (a2 * a2);
   }
   void add_field_impulse(std::size_t n, const Vec3& p) {
     double* g = m_field.data() + 3 * n;
@@ -173,9 +170,9 @@ public:
   struct CouplingLedger {
     bool any = false;
     std::uint64_t step = 0;
-    /// where and how much the last call deposited (full impulse per particle,
-    /// spread with the stencil of that position)
-    std::vector<Vec3> last_position, last_impulse;
+    /// how much the last call deposited (full impulse per particle, spread
+    /// with that call's stencils, still in `stencils`)
+    std::vector<Vec3> last_impulse;
     Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
     /// The stencil of a particle as its first node (lowest index on every
     /// axis) and, per axis, the index step to the second node (the lattice
