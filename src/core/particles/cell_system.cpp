@@ -9,13 +9,11 @@
 namespace pyoif {
 
 bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
-  const double limit2 = 0.25 * skin * skin;
+  const double limit2 = displacement_limit2();
   bool moved = !m_valid || m_pos_at_rebuild.size() != p.n_local();
   for (std::size_t i = 0; i < p.n_local(); ++i) {
     const Vec3& x = p.pos[i];
-    // Beyond 1e9 box lengths a particle has certainly blown up (and folding
-    // would overflow the image counter).
-    if (!std::isfinite(x[0] + x[1] + x[2]) || x.cwiseAbs().maxCoeff() > m_blowup_distance) {
+    if (runaway(x)) {
       std::ostringstream msg;
       msg << "particle " << p.id[i] << " has a non-finite or runaway position (" << x.transpose()
           << ") at time " << time << "; force " << p.force[i].transpose()

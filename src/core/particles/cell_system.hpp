@@ -10,6 +10,7 @@
 #include "system/box_geometry.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <unordered_set>
 #include <vector>
@@ -30,6 +31,21 @@ public:
    *  the structure was invalidated. Throws SimulationInstability on a
    *  non-finite position. */
   bool needs_rebuild(const ParticleStore& p, double time) const;
+  /** The test of needs_rebuild for a loop that has the new positions at hand
+   *  (the integrator's drift), so the positions are not read twice: the
+   *  positions at the last re-sort, null when a re-sort is due anyway (the
+   *  structure is invalid or the particles changed). */
+  const Vec3* displacement_reference(std::size_t n_local) const {
+    return m_valid && m_pos_at_rebuild.size() == n_local ? m_pos_at_rebuild.data() : nullptr;
+  }
+  /** Squared displacement since the last re-sort beyond which one is due. */
+  double displacement_limit2() const { return 0.25 * skin * skin; }
+  /** Whether position x is non-finite or runaway (needs_rebuild throws on it). */
+  bool runaway(const Vec3& x) const {
+    // Beyond 1e9 box lengths a particle has certainly blown up (and folding
+    // would overflow the image counter).
+    return !std::isfinite(x[0] + x[1] + x[2]) || x.cwiseAbs().maxCoeff() > m_blowup_distance;
+  }
   void invalidate() { m_valid = false; }
   /** Refresh ghost positions from their origins (MPI: ghost exchange). */
   void update_ghosts(ParticleStore& p, const BoxGeometry& box) const;

@@ -8,8 +8,8 @@
 
 namespace pyoif {
 
-void System::prepare_step() {
-  if (cells.needs_rebuild(particles, time))
+void System::prepare_step(int moved) {
+  if (moved < 0 ? cells.needs_rebuild(particles, time) : moved > 0)
     cells.rebuild(particles, box, nonbonded.max_range());
   else
     cells.update_ghosts(particles, box);
@@ -223,10 +223,11 @@ void System::add_langevin_forces() {
   }
 }
 
-template <bool with_energy> void System::force_loop(Energies* e) {
+template <bool with_energy> void System::force_loop(Energies* e, bool forces_preset) {
   auto& p = particles;
-  for (std::size_t i = 0; i < p.n_local(); ++i)
-    p.force[i] = p.ext_force[i];
+  if (!forces_preset)
+    for (std::size_t i = 0; i < p.n_local(); ++i)
+      p.force[i] = p.ext_force[i];
   add_bonded_forces(e);
   add_nonbonded_forces(e);
   add_constraint_forces(e);
@@ -271,8 +272,13 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   const double dt = m_time_step;
   const int lb_interval = lb_steps_per_update();
   // Velocity Verlet. The half kick dt / 2m per particle is computed once per
-  // run (mass, fixed flags and order do not change during it); without fixed
-  // coordinates the loops are branch- and division-free and vectorise.
+  // run (mass, fixed flags and order do not change during it). Between two
+  // steps of a run the second half kick of one, the first of the next and
+  // its drift are one pass over the particles, which also resets the forces
+  // to the external ones and does the cell system's displacement test while
+  // the positions are at hand (the particle arrays do not stay in cache
+  // between passes: the lattice update streams through in between). The
+  // arithmetic is that of separate passes, (v + h f) + h f, bit for bit.
   const std::size_t n = p.n_local();
   std::vector<double> half_kick(n);
   bool any_fixed = false;
@@ -280,35 +286,75 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     half_kick[i] = 0.5 * dt / p.mass[i];
     any_fixed |= p.fixed[i] != 0;
   }
-  auto kick = [&](bool and_drift) {
-    if (!any_fixed) {
-      for (std::size_t i = 0; i < n; ++i)
-        p.vel[i] += half_kick[i] * p.force[i];
-      if (and_drift)
-        for (std::size_t i = 0; i < n; ++i)
-          p.pos[i] += dt * p.vel[i];
-      return;
-    }
-    for (std::size_t i = 0; i < n; ++i)
-      for (int d = 0; d < 3; ++d) {
-        if (p.fixed[i] & (1u << d))
-          continue; // neither kicked nor moved
-        p.vel[i][d] += half_kick[i] * p.force[i][d];
-        if (and_drift)
-          p.pos[i][d] += dt * p.vel[i][d];
+  // kicks half kicks (1 or 2), then the drift; returns the displacement test
+  // (1: some particle moved beyond the skin or a re-sort is due anyway, 0:
+  // none) or -1 when a position is not finite (prepare_step then names it)
+  auto advance = [&](auto kicks) {
+    constexpr int n_kicks = decltype(kicks)::value;
+    const Vec3* const x0 = cells.displacement_reference(n);
+    const double limit2 = cells.displacement_limit2();
+    double worst2 = 0.0;
+    bool runaway = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double h = half_kick[i];
+      const Vec3 f = p.force[i];
+      Vec3 v = p.vel[i];
+      Vec3 x = p.pos[i];
+      if (!any_fixed) {
+        for (int k = 0; k < n_kicks; ++k)
+          v += h * f;
+        x += dt * v;
+      } else {
+        for (int d = 0; d < 3; ++d) {
+          if (p.fixed[i] & (1u << d))
+            continue; // neither kicked nor moved
+          for (int k = 0; k < n_kicks; ++k)
+            v[d] += h * f[d];
+          x[d] += dt * v[d];
+        }
       }
+      p.vel[i] = v;
+      p.pos[i] = x;
+      if (n_kicks == 2)
+        p.force[i] = p.ext_force[i];
+      if (x0)
+        worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
+      runaway |= cells.runaway(x);
+    }
+    return runaway ? -1 : (!x0 || worst2 > limit2) ? 1 : 0;
   };
+  auto second_kick = [&] {
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d)
+        if (!(p.fixed[i] & (1u << d)))
+          p.vel[i][d] += half_kick[i] * p.force[i][d];
+  };
+  if (n_steps == 0) {
+    m_forces_valid = true;
+    return;
+  }
+  int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
   for (int step = 0; step < n_steps; ++step) {
-    kick(true); // first half kick + drift
     ++step_count;
     time += dt;
-    prepare_step();
-    force_loop<false>(nullptr);
-    kick(false); // second half kick
+    prepare_step(moved);
+    // after the fused pass the forces already hold the external forces
+    force_loop<false>(nullptr, step > 0 && moved >= 0);
+    const bool last = step + 1 == n_steps;
+    if (last)
+      second_kick();
     if (lb && ++m_lb_substep >= lb_interval) {
       m_lb_substep = 0;
-      lb->step();
+      try {
+        lb->step();
+      } catch (...) {
+        if (!last)
+          second_kick(); // leave the particles as a step that ended here
+        throw;
+      }
     }
+    if (!last) // second half kick of this step, first one and drift of the next
+      moved = advance(std::integral_constant<int, 2>{});
   }
   m_forces_valid = true;
 }

@@ -101,8 +101,12 @@ public:
   int lb_steps_per_update() const;
 
 private:
-  void prepare_step(); ///< re-sort if needed and update ghosts
-  template <bool with_energy> void force_loop(Energies* e);
+  /** Re-sort if needed and update ghosts. moved: the integrator's drift
+   *  already tested the displacements (1 beyond the skin, 0 not); -1: test. */
+  void prepare_step(int moved = -1);
+  /** All forces; forces_preset: the local forces already hold the external
+   *  forces (the integrator's fused pass set them). */
+  template <bool with_energy> void force_loop(Energies* e, bool forces_preset = false);
   void add_bonded_forces(Energies* e);
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
