@@ -194,7 +194,17 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     ledger.last_impulse[i] = impulse;
     impulse_sum += impulse;
   }
+  // the field is the size of the lattice and out of cache by now, and the
+  // entries are read out of their order: both are requested a few nodes
+  // ahead (the list is mostly in memory order, but with gaps the hardware
+  // prefetcher does not follow)
+  constexpr std::size_t ahead = 8;
   for (std::size_t j = 0; j < n_nodes; ++j) {
+    if (j + ahead < n_nodes) {
+      const std::size_t later = node_list[j + ahead];
+      fluid.prefetch_field(later);
+      __builtin_prefetch(&state[compact[later]].impulse, 0, 3);
+    }
     const std::size_t node = node_list[j];
     fluid.add_field_impulse(node, state[compact[node]].impulse);
   }

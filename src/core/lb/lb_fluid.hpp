@@ -159,6 +159,8 @@ public:
     g[2] += p[2];
     m_field_chunk[n >> field_chunk_bits] = 1;
   }
+  /** Requests the field line of padded index n (a later add_field_impulse). */
+  void prefetch_field(std::size_t n) const { __builtin_prefetch(m_field.data() + 3 * n, 1, 3); }
   /** Bookkeeping of the particle coupling under velocity Verlet: an MD step's
    *  coupling force F_n acts on the particles in two half kicks (dt/2 at the
    *  end of step n, dt/2 at the start of step n+1) but goes to the fluid at
