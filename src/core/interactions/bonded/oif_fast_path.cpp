@@ -1003,7 +1003,7 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
     largest_nodes = std::max<std::size_t>(largest_nodes, r.node_end - r.node_begin);
     largest_tri = std::max<std::size_t>(largest_tri, r.triangle_end - r.triangle_begin);
   }
-  m_node.assign(kNodeArrays * largest_nodes, Vec3::Zero());
+  m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
   m_f.resize(n_slots);
   m_normal.resize(n_slots);
@@ -1014,7 +1014,7 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
                                     const BoxGeometry& box, bool velocities, bool* regroup) {
   const CellRange& r = m_cells[cell];
   const std::size_t section = m_node.size() / kNodeArrays; // largest cell's nodes
-  Vec3* const x = m_node.data();
+  Node4* const x = m_node.data();
   const Vec3& L = box.length();
   const int ref = m_index[r.node_begin];
   const Vec3 pos_r = p.pos[ref];
@@ -1027,7 +1027,7 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
     // unfolded relative to the reference node, the image difference first
     // (integers, exact), as FastBondPlan::gather_relative
     const Vec3 xk = (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(L);
-    x[s - r.node_begin] = xk;
+    x[s - r.node_begin].v = Lanes{xk[0], xk[1], xk[2], 0.0};
     low = low.cwiseMin(xk);
     high = high.cwiseMax(xk);
   }
@@ -1042,27 +1042,30 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
     if (box.periodic()[d] && high[d] - low[d] > 0.5 * L[d])
       return false;
   if (velocities) {
-    Vec3* const v = m_node.data() + section;
-    for (int s = r.node_begin; s < r.node_end; ++s)
-      v[s - r.node_begin] = p.vel[m_index[s]];
+    Node4* const v = m_node.data() + section;
+    for (int s = r.node_begin; s < r.node_end; ++s) {
+      const Vec3& vk = p.vel[m_index[s]];
+      v[s - r.node_begin].v = Lanes{vk[0], vk[1], vk[2], 0.0};
+    }
   }
   return true;
 }
 
 bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
                                       const OifGlobalForces& global_ia, bool write_normals) {
-  static_assert(sizeof(Vec3) == 3 * sizeof(double), "node arrays are read as arrays of doubles");
   const CellRange& r = m_cells[cell];
   const int n_nodes = r.node_end - r.node_begin, n_tri = r.triangle_end - r.triangle_begin;
-  // node arrays, 3 doubles per node (the scalar gathers and scatters of the
-  // passes below touch one cache line per node, not three)
+  // node arrays, one 4-lane vector (x, y, z, 0) per node (Node4)
   const std::size_t section = m_node.size() / kNodeArrays, ts = m_tri.size() / kTriangleArrays;
-  const double* const x = m_node[0].data();
-  const double* const v = m_node[section].data();
-  double* const f = m_node[2 * section].data();
-  double* const nsum = m_node[3 * section].data();
-  std::fill(f, f + 3 * n_nodes, 0.0);
-  std::fill(nsum, nsum + 3 * n_nodes, 0.0);
+  const Node4* const x = m_node.data();
+  const Node4* const v = m_node.data() + section;
+  Node4* const f = m_node.data() + 2 * section;
+  Node4* const nsum = m_node.data() + 3 * section;
+  const Lanes zero{0.0, 0.0, 0.0, 0.0};
+  for (int k = 0; k < n_nodes; ++k) {
+    f[k].v = zero;
+    nsum[k].v = zero;
+  }
   double* const tri = m_tri.data();
   double *const e1x = tri, *const e1y = tri + ts, *const e1z = tri + 2 * ts;
   double *const e2x = tri + 3 * ts, *const e2y = tri + 4 * ts, *const e2z = tri + 5 * ts;
@@ -1086,7 +1089,7 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   // In blocks: the scalar gather of the separations, then the arithmetic as
   // loops over arrays (vectorised).
   const double kal = local_ia.kal;
-  const double* const origin = x + 3 * r.origin;
+  const Lanes origin = x[r.origin].v;
   constexpr double third = 1.0 / 3.0;
   int bad = 0;
   for (int first = 0; first < n_tri; first += kBlock) {
@@ -1094,11 +1097,11 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     double ra[3][kBlock];
     for (int k = 0; k < nb; ++k) {
       const int q = first + k;
-      const double *const pa = x + 3 * v0[q], *const pb = x + 3 * v1[q], *const pc = x + 3 * v2[q];
-      e1x[q] = pb[0] - pa[0], e1y[q] = pb[1] - pa[1], e1z[q] = pb[2] - pa[2];
-      e2x[q] = pc[0] - pa[0], e2y[q] = pc[1] - pa[1], e2z[q] = pc[2] - pa[2];
+      const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, a = pa - origin;
+      e1x[q] = e1[0], e1y[q] = e1[1], e1z[q] = e1[2];
+      e2x[q] = e2[0], e2y[q] = e2[1], e2z[q] = e2[2];
       for (int d = 0; d < 3; ++d)
-        ra[d][k] = pa[d] - origin[d];
+        ra[d][k] = a[d];
     }
     PYOIF_INDEPENDENT_ITERATIONS
     for (int k = 0; k < nb; ++k) {
@@ -1158,21 +1161,14 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     }
     for (int k = 0; k < nb; ++k) {
       const int q = first + k;
-      double *const fa = f + 3 * v0[q], *const fb = f + 3 * v1[q], *const fc = f + 3 * v2[q];
-      for (int d = 0; d < 3; ++d) {
-        fa[d] += f0[d][k];
-        fb[d] += f1[d][k];
-        fc[d] += f2[d][k];
-      }
+      f[v0[q]].v += Lanes{f0[0][k], f0[1][k], f0[2][k], 0.0};
+      f[v1[q]].v += Lanes{f1[0][k], f1[1][k], f1[2][k], 0.0};
+      f[v2[q]].v += Lanes{f2[0][k], f2[1][k], f2[2][k], 0.0};
       if (normal_sums) {
-        double *const sa_ = nsum + 3 * v0[q], *const sb = nsum + 3 * v1[q],
-                      *const sc = nsum + 3 * v2[q];
-        const double n_[3] = {nx[q], ny[q], nz[q]};
-        for (int d = 0; d < 3; ++d) {
-          sa_[d] += n_[d];
-          sb[d] += n_[d];
-          sc[d] += n_[d];
-        }
+        const Lanes n_{nx[q], ny[q], nz[q], 0.0};
+        nsum[v0[q]].v += n_;
+        nsum[v1[q]].v += n_;
+        nsum[v2[q]].v += n_;
       }
     }
   }
@@ -1186,20 +1182,20 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     const int *const eb = m_edge_b.data() + first, *const ea = m_edge_a.data() + first,
                      *const ec = m_edge_c.data() + first, *const ed = m_edge_d.data() + first;
     for (int k = 0; k < nb; ++k) {
-      const double *const xb = x + 3 * eb[k], *const xc = x + 3 * ec[k];
+      const Lanes xb = x[eb[k]].v, e = x[ec[k]].v - xb;
       for (int d = 0; d < 3; ++d)
-        blk.e[d][k] = xc[d] - xb[d];
+        blk.e[d][k] = e[d];
       if (wings) {
-        const double *const xa = x + 3 * ea[k], *const xd = x + 3 * ed[k];
+        const Lanes u = x[ea[k]].v - xb, w = x[ed[k]].v - xb;
         for (int d = 0; d < 3; ++d) {
-          blk.u[d][k] = xa[d] - xb[d];
-          blk.w[d][k] = xd[d] - xb[d];
+          blk.u[d][k] = u[d];
+          blk.w[d][k] = w[d];
         }
       }
       if (velocities) {
-        const double *const vb = v + 3 * eb[k], *const vc = v + 3 * ec[k];
+        const Lanes dv = v[ec[k]].v - v[eb[k]].v;
         for (int d = 0; d < 3; ++d)
-          blk.dv[d][k] = vc[d] - vb[d];
+          blk.dv[d][k] = dv[d];
       }
     }
     if (!edge_block_forces(blk, nb, m_edge_r0.data() + first, m_edge_inv_r0.data() + first,
@@ -1207,17 +1203,11 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
                            wings))
       return false;
     for (int k = 0; k < nb; ++k) {
-      double *const fb = f + 3 * eb[k], *const fc = f + 3 * ec[k];
-      for (int d = 0; d < 3; ++d) {
-        fb[d] += blk.fb[d][k];
-        fc[d] += blk.fc[d][k];
-      }
+      f[eb[k]].v += Lanes{blk.fb[0][k], blk.fb[1][k], blk.fb[2][k], 0.0};
+      f[ec[k]].v += Lanes{blk.fc[0][k], blk.fc[1][k], blk.fc[2][k], 0.0};
       if (wings) {
-        double *const fa = f + 3 * ea[k], *const fd = f + 3 * ed[k];
-        for (int d = 0; d < 3; ++d) {
-          fa[d] += blk.fa[d][k];
-          fd[d] += blk.fd[d][k];
-        }
+        f[ea[k]].v += Lanes{blk.fa[0][k], blk.fa[1][k], blk.fa[2][k], 0.0};
+        f[ed[k]].v += Lanes{blk.fd[0][k], blk.fd[1][k], blk.fd[2][k], 0.0};
       }
     }
   }
@@ -1226,20 +1216,21 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   // decline (the generic loop names the bond)
   const double largest = std::numeric_limits<double>::max();
   int finite = 1;
-  for (int k = 0; k < 3 * n_nodes; ++k) {
-    f[k] += volume_factor * nsum[k];
-    finite &= std::abs(f[k]) <= largest;
+  for (int k = 0; k < n_nodes; ++k) {
+    const Lanes fk = f[k].v + volume_factor * nsum[k].v;
+    for (int d = 0; d < 3; ++d) {
+      m_f[r.node_begin + k][d] = fk[d];
+      finite &= std::abs(fk[d]) <= largest;
+    }
   }
   if (!finite)
     return false;
-  const Vec3* const fv = m_node.data() + 2 * section;
-  std::copy(fv, fv + n_nodes, m_f.begin() + r.node_begin);
   if (write_normals) { // OifOutDirection's area-weighted normals, outward by the volume's sign
-    const Vec3* const sum = m_node.data() + 3 * section;
     Vec3* const normal = m_normal.data() + r.node_begin;
     for (int k = 0; k < n_nodes; ++k) {
-      const double len = sum[k].norm();
-      normal[k] = len > 0.0 ? Vec3(sign * sum[k] / len) : Vec3(sign * sum[k]);
+      const Vec3 sum(nsum[k].v[0], nsum[k].v[1], nsum[k].v[2]);
+      const double len = sum.norm();
+      normal[k] = len > 0.0 ? Vec3(sign * sum / len) : Vec3(sign * sum);
     }
   }
   return true;

@@ -301,10 +301,17 @@ private:
 
   static constexpr int kNodeArrays = 4;      ///< x, v, f, normal sum
   static constexpr int kTriangleArrays = 13; ///< e1, e2, N: 3 each; area, volume, g, c
-  std::vector<Vec3> m_node;                  ///< kNodeArrays x (largest cell's nodes)
-  std::vector<double> m_tri;                 ///< kTriangleArrays x (largest cell's triangles)
-  std::vector<Vec3> m_f;                     ///< slot -> force of this step
-  std::vector<Vec3> m_normal;                ///< slot -> unit normal (write_normals)
+  /** A node's vector as one 4-lane register (x, y, z, 0): the scatters add a
+   *  bond's force to a node with one load, add and store instead of three
+   *  (the passes are bound by stores), the gathers load a node at once. */
+  using Lanes = double __attribute__((vector_size(32)));
+  struct alignas(32) Node4 {
+    Lanes v;
+  };
+  std::vector<Node4> m_node;  ///< kNodeArrays x (largest cell's nodes)
+  std::vector<double> m_tri;  ///< kTriangleArrays x (largest cell's triangles)
+  std::vector<Vec3> m_f;      ///< slot -> force of this step
+  std::vector<Vec3> m_normal; ///< slot -> unit normal (write_normals)
 };
 
 } // namespace pyoif::oif
