@@ -1005,6 +1005,7 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
   }
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
+  m_tri_edge.assign(2 * largest_tri, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_f.resize(n_slots);
   m_normal.resize(n_slots);
   return true;
@@ -1090,6 +1091,7 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   // loops over arrays (vectorised).
   const double kal = local_ia.kal;
   const Lanes origin = x[r.origin].v;
+  Node4 *const edge1 = m_tri_edge.data(), *const edge2 = edge1 + m_tri_edge.size() / 2;
   constexpr double third = 1.0 / 3.0;
   int bad = 0;
   for (int first = 0; first < n_tri; first += kBlock) {
@@ -1098,6 +1100,8 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     for (int k = 0; k < nb; ++k) {
       const int q = first + k;
       const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, a = pa - origin;
+      edge1[q].v = e1;
+      edge2[q].v = e2;
       e1x[q] = e1[0], e1y[q] = e1[1], e1z[q] = e1[2];
       e2x[q] = e2[0], e2y[q] = e2[1], e2z[q] = e2[2];
       for (int d = 0; d < 3; ++d)
@@ -1141,35 +1145,21 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   const double volume_factor =
       kv != 0.0 ? -kv * ((sign * cell_volume - V0) / V0) * sign / 6.0 : 0.0;
 
-  // the area forces along (T - p_i) on the vertices, in blocks: the
-  // arithmetic as array loops, then the scatter; the normals N summed per
-  // node (the volume force and the node normal are along that sum)
+  // the area forces along (T - p_i) on the vertices, T - p0 = (e1 + e2) / 3,
+  // as vectors per triangle; the normals N summed per node (the volume
+  // force and the node normal are along that sum)
   const bool normal_sums = volume_factor != 0.0 || write_normals;
-  for (int first = 0; first < n_tri; first += kBlock) {
-    const int nb = std::min(kBlock, n_tri - first);
-    double f0[3][kBlock], f1[3][kBlock], f2[3][kBlock];
-    for (int k = 0; k < nb; ++k) {
-      const int q = first + k;
-      const double cq = coef[q] + area_factor * g[q];
-      const double m0x = (e1x[q] + e2x[q]) * third, m0y = (e1y[q] + e2y[q]) * third,
-                   m0z = (e1z[q] + e2z[q]) * third;
-      f0[0][k] = cq * m0x, f0[1][k] = cq * m0y, f0[2][k] = cq * m0z;
-      f1[0][k] = cq * (m0x - e1x[q]), f1[1][k] = cq * (m0y - e1y[q]),
-      f1[2][k] = cq * (m0z - e1z[q]);
-      f2[0][k] = cq * (m0x - e2x[q]), f2[1][k] = cq * (m0y - e2y[q]),
-      f2[2][k] = cq * (m0z - e2z[q]);
-    }
-    for (int k = 0; k < nb; ++k) {
-      const int q = first + k;
-      f[v0[q]].v += Lanes{f0[0][k], f0[1][k], f0[2][k], 0.0};
-      f[v1[q]].v += Lanes{f1[0][k], f1[1][k], f1[2][k], 0.0};
-      f[v2[q]].v += Lanes{f2[0][k], f2[1][k], f2[2][k], 0.0};
-      if (normal_sums) {
-        const Lanes n_{nx[q], ny[q], nz[q], 0.0};
-        nsum[v0[q]].v += n_;
-        nsum[v1[q]].v += n_;
-        nsum[v2[q]].v += n_;
-      }
+  for (int q = 0; q < n_tri; ++q) {
+    const double cq = coef[q] + area_factor * g[q];
+    const Lanes e1 = edge1[q].v, e2 = edge2[q].v, m0 = (e1 + e2) * third;
+    f[v0[q]].v += cq * m0;
+    f[v1[q]].v += cq * (m0 - e1);
+    f[v2[q]].v += cq * (m0 - e2);
+    if (normal_sums) {
+      const Lanes n_{nx[q], ny[q], nz[q], 0.0};
+      nsum[v0[q]].v += n_;
+      nsum[v1[q]].v += n_;
+      nsum[v2[q]].v += n_;
     }
   }
 
@@ -1262,11 +1252,15 @@ bool FusedMembranePlan::run(const OifLocalForces& local_ia, const BondGroup& loc
     if (!evaluate_cell(cell, local_ia, global_ia, write_normals))
       return false;
   }
-  for (std::size_t s = 0; s < m_index.size(); ++s)
-    p.force[m_index[s]] += m_f[s];
+  // one pass over the particles (their arrays are out of cache by now)
   if (write_normals)
-    for (std::size_t s = 0; s < m_index.size(); ++s)
+    for (std::size_t s = 0; s < m_index.size(); ++s) {
+      p.force[m_index[s]] += m_f[s];
       p.normal[m_index[s]] = m_normal[s];
+    }
+  else
+    for (std::size_t s = 0; s < m_index.size(); ++s)
+      p.force[m_index[s]] += m_f[s];
   return true;
 }
 

@@ -308,7 +308,10 @@ private:
   struct alignas(32) Node4 {
     Lanes v;
   };
-  std::vector<Node4> m_node;  ///< kNodeArrays x (largest cell's nodes)
+  std::vector<Node4> m_node; ///< kNodeArrays x (largest cell's nodes)
+  /// per triangle its edge vectors e1 = b - a, e2 = c - a as vectors (the
+  /// force scatter's centroid directions), 2 x (largest cell's triangles)
+  std::vector<Node4> m_tri_edge;
   std::vector<double> m_tri;  ///< kTriangleArrays x (largest cell's triangles)
   std::vector<Vec3> m_f;      ///< slot -> force of this step
   std::vector<Vec3> m_normal; ///< slot -> unit normal (write_normals)
