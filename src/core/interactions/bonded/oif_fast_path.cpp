@@ -101,15 +101,10 @@ struct EdgeBlock {
   double e[3][kBlock], u[3][kBlock], w[3][kBlock], dv[3][kBlock];
   double l[kBlock], inv_l2[kBlock], coefficient[kBlock];
   double n1[3][kBlock], n2[3][kBlock], n1_2[kBlock], n2_2[kBlock];
-  double sine[kBlock], cosine[kBlock], dphi[kBlock];
+  double sine[kBlock], cosine[kBlock], dphi[kBlock], inv_n1n2[kBlock];
   double fa[3][kBlock], fb[3][kBlock], fc[3][kBlock], fd[3][kBlock];
 };
 
-/** Stretching (eq. 3), membrane viscosity and bending (eq. 4) of the nb
- *  edges whose separations (e, and u, w with wings, dv with kvisc) are in
- *  blk: sets the forces fa..fd (fa, fd zero without wings) and, with wings,
- *  the wing normals n1, n2 and their squared lengths. False on a zero-length
- *  edge or (wings) a degenerate wing triangle: the generic loop must speak. */
 /** A cell's area (sum of its triangles' areas) and volume (eqs. 6, 7: sum of
  *  a.N / 6), from per-triangle arrays: four partial sums, so that there is
  *  no loop-carried chain of additions. */
@@ -130,87 +125,93 @@ void cell_area_volume(const double* area, const double* vol, int n, double& cell
   cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
 }
 
-bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* inv_r0,
-                       const double* cos_psi0, const double* sin_psi0, const OifLocalForces& ia,
-                       bool wings) {
+/** The edge pass of edge_block_forces for one combination of terms known
+ *  at compile time: neo (ks != 0), visc (kvisc != 0, dv set), wings (u, w
+ *  set; n1, n2 and their squared lengths computed), bend (kb != 0; needs
+ *  wings). Two loops over the block (vectorised): the first computes per
+ *  edge everything up to the bending angle, the second the forces; between
+ *  them the edges whose angle left the polynomial's range get the library's
+ *  arctangent. The four quotients of the first loop (1 / l^2, the
+ *  neo-Hookean kappa's denominator, the angle's tangent, 1 / (|n1|^2
+ *  |n2|^2)) share one division: the divider, not the arithmetic, bounds
+ *  this loop. */
+template <bool neo, bool visc, bool wings, bool bend>
+bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* inv_r0,
+                      const double* cos_psi0, const double* sin_psi0, const OifLocalForces& ia) {
+  static_assert(!bend || wings, "bending needs the wing triangles");
   const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
-  int bad = 0;
+  int bad = 0, slow = 0;
+  PYOIF_INDEPENDENT_ITERATIONS
   for (int k = 0; k < nb; ++k) {
-    const double l2 =
-        blk.e[0][k] * blk.e[0][k] + blk.e[1][k] * blk.e[1][k] + blk.e[2][k] * blk.e[2][k];
+    const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
+    const double l2 = ex * ex + ey * ey + ez * ez;
     bad |= !(l2 > 0.0);
-    blk.l[k] = std::sqrt(l2);
-    blk.inv_l2[k] = 1.0 / l2;
-  }
-  if (bad)
-    return false;
-
-  // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
-  for (int k = 0; k < nb; ++k)
-    blk.coefficient[k] = 0.0;
-  if (ks != 0.0)
-    for (int k = 0; k < nb; ++k) {
-      const double l = blk.l[k];
-      blk.coefficient[k] +=
-          ks * neo_hookean_kappa(l * inv_r0[k]) * (l - r0[k]) * l * blk.inv_l2[k]; // (l - l0) / l
-    }
-  if (kslin != 0.0)
-    for (int k = 0; k < nb; ++k)
-      blk.coefficient[k] += kslin * (blk.l[k] - r0[k]) * blk.l[k] * blk.inv_l2[k];
-  if (kvisc != 0.0)
-    for (int k = 0; k < nb; ++k)
-      blk.coefficient[k] +=
-          kvisc *
-          (blk.dv[0][k] * blk.e[0][k] + blk.dv[1][k] * blk.e[1][k] + blk.dv[2][k] * blk.e[2][k]) *
-          blk.inv_l2[k];
-  for (int k = 0; k < nb; ++k)
-    for (int d = 0; d < 3; ++d) {
-      const double fe = blk.coefficient[k] * blk.e[d][k];
-      blk.fa[d][k] = 0.0;
-      blk.fb[d][k] = fe;
-      blk.fc[d][k] = -fe;
-      blk.fd[d][k] = 0.0;
-    }
-
-  if (wings) {
+    const double l = std::sqrt(l2);
+    blk.l[k] = l;
     // the triangles' normals n1 = (a - b) x e (triangle ABC) and
     // n2 = e x (d - b) (BCD), |n| = twice the area
-    for (int k = 0; k < nb; ++k) {
-      const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
+    double n1x = 0.0, n1y = 0.0, n1z = 0.0, n2x = 0.0, n2y = 0.0, n2z = 0.0;
+    double n1_2 = 1.0, n2_2 = 1.0;
+    if constexpr (wings) {
       const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
       const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
-      const double n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
-      const double n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
-      const double n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
-      const double n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
+      n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
+      n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
+      n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
+      n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
       bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0); // degenerate triangle
       blk.n1[0][k] = n1x, blk.n1[1][k] = n1y, blk.n1[2][k] = n1z;
       blk.n2[0][k] = n2x, blk.n2[1][k] = n2y, blk.n2[2][k] = n2z;
       blk.n1_2[k] = n1_2;
       blk.n2_2[k] = n2_2;
     }
-    if (bad)
-      return false;
-  }
-
-  if (kb != 0.0) {
     // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
     // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
     // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
-    int slow = 0;
-    for (int k = 0; k < nb; ++k) {
-      const double y = blk.l[k] * (blk.n1[0][k] * blk.w[0][k] + blk.n1[1][k] * blk.w[1][k] +
-                                   blk.n1[2][k] * blk.w[2][k]);
-      const double x =
-          blk.n1[0][k] * blk.n2[0][k] + blk.n1[1][k] * blk.n2[1][k] + blk.n1[2][k] * blk.n2[2][k];
+    double sine = 0.0, cosine = 1.0, tangent_denominator = 1.0, n1n2 = 1.0;
+    bool small = true;
+    if constexpr (bend) {
+      const double y = l * (n1x * blk.w[0][k] + n1y * blk.w[1][k] + n1z * blk.w[2][k]);
+      const double x = n1x * n2x + n1y * n2y + n1z * n2z;
       const double c0 = cos_psi0[k], s0 = sin_psi0[k];
-      const double sine = y * c0 - x * s0, cosine = x * c0 + y * s0;
-      const bool small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+      sine = y * c0 - x * s0;
+      cosine = x * c0 + y * s0;
+      small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
       slow |= !small;
-      blk.dphi[k] = -atan_small(small ? sine / cosine : 0.0);
+      tangent_denominator = small ? cosine : 1.0;
+      n1n2 = n1_2 * n2_2;
+    }
+    // neo-Hookean kappa(lambda) = sqrt(lambda) (lambda^3 + 1) / (lambda^4 + 1)
+    // (oif_edge_terms.hpp)
+    double lambda = 1.0, lambda2 = 1.0, kappa_denominator = 1.0;
+    if constexpr (neo) {
+      lambda = l * inv_r0[k];
+      lambda2 = lambda * lambda;
+      kappa_denominator = lambda2 * lambda2 + 1.0;
+    }
+    // one reciprocal for the four quotients
+    const double p = l2 * kappa_denominator, q = tangent_denominator * n1n2;
+    const double r = 1.0 / (p * q);
+    const double inv_l2 = r * kappa_denominator * q;
+    blk.inv_l2[k] = inv_l2;
+    // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
+    const double stretch = (l - r0[k]) * l * inv_l2; // (l - l0) / l
+    double coefficient = kslin * stretch;
+    if constexpr (neo)
+      coefficient += ks * (std::sqrt(lambda) * (lambda2 * lambda + 1.0) * (r * l2 * q)) * stretch;
+    if constexpr (visc)
+      coefficient += kvisc * (blk.dv[0][k] * ex + blk.dv[1][k] * ey + blk.dv[2][k] * ez) * inv_l2;
+    blk.coefficient[k] = coefficient;
+    if constexpr (bend) {
+      blk.dphi[k] = -atan_small(small ? sine * (r * p * n1n2) : 0.0);
+      blk.inv_n1n2[k] = r * p * tangent_denominator;
       blk.sine[k] = sine;
       blk.cosine[k] = cosine;
     }
+  }
+  if (bad)
+    return false;
+  if constexpr (bend)
     if (slow) // deviations beyond atan(1/4): the library's arctangent
       for (int k = 0; k < nb; ++k) {
         const double sine = blk.sine[k], cosine = blk.cosine[k];
@@ -221,10 +222,19 @@ bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* i
           dphi += 2.0 * M_PI;
         blk.dphi[k] = dphi;
       }
-    // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
-    // split by the wings' foot points ta, td (oif_bending.hpp)
-    for (int k = 0; k < nb; ++k) {
-      const double c = kb * blk.dphi[k] * blk.l[k] / (blk.n1_2[k] * blk.n2_2[k]);
+  // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
+  // split by the wings' foot points ta, td (oif_bending.hpp)
+  PYOIF_INDEPENDENT_ITERATIONS
+  for (int k = 0; k < nb; ++k) {
+    for (int d = 0; d < 3; ++d) {
+      const double fe = blk.coefficient[k] * blk.e[d][k];
+      blk.fb[d][k] = fe;
+      blk.fc[d][k] = -fe;
+      blk.fa[d][k] = 0.0;
+      blk.fd[d][k] = 0.0;
+    }
+    if constexpr (bend) {
+      const double c = kb * blk.dphi[k] * blk.l[k] * blk.inv_n1n2[k];
       const double ca = c * blk.n2_2[k], cd = c * blk.n1_2[k];
       const double ta =
           (blk.u[0][k] * blk.e[0][k] + blk.u[1][k] * blk.e[1][k] + blk.u[2][k] * blk.e[2][k]) *
@@ -234,14 +244,40 @@ bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* i
           blk.inv_l2[k];
       for (int d = 0; d < 3; ++d) {
         const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
-        blk.fa[d][k] += fa;
-        blk.fd[d][k] += fd;
+        blk.fa[d][k] = fa;
+        blk.fd[d][k] = fd;
         blk.fb[d][k] -= (1.0 - ta) * fa + (1.0 - td) * fd;
         blk.fc[d][k] -= ta * fa + td * fd;
       }
     }
   }
   return true;
+}
+
+/** Stretching (eq. 3), membrane viscosity and bending (eq. 4) of the nb
+ *  edges whose separations (e, and u, w with wings, dv with kvisc) are in
+ *  blk: sets the forces fa..fd (fa, fd zero without wings) and, with wings,
+ *  the wing normals n1, n2 and their squared lengths. False on a zero-length
+ *  edge or (wings) a degenerate wing triangle: the generic loop must speak. */
+bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* inv_r0,
+                       const double* cos_psi0, const double* sin_psi0, const OifLocalForces& ia,
+                       bool wings) {
+  const bool neo = ia.ks != 0.0, visc = ia.kvisc != 0.0, bend = ia.kb != 0.0 && wings;
+  // one instantiation per combination, chosen outside the edge loops
+  auto with = [&](auto neo_, auto visc_, auto wings_, auto bend_) {
+    return edge_block_terms<decltype(neo_)::value, decltype(visc_)::value, decltype(wings_)::value,
+                            decltype(bend_)::value>(blk, nb, r0, inv_r0, cos_psi0, sin_psi0, ia);
+  };
+  using yes = std::true_type;
+  using no = std::false_type;
+  auto by_wings = [&](auto neo_, auto visc_) {
+    if (bend)
+      return with(neo_, visc_, yes{}, yes{});
+    return wings ? with(neo_, visc_, yes{}, no{}) : with(neo_, visc_, no{}, no{});
+  };
+  if (neo)
+    return visc ? by_wings(yes{}, yes{}) : by_wings(yes{}, no{});
+  return visc ? by_wings(no{}, yes{}) : by_wings(no{}, no{});
 }
 
 /** A triangle's key, independent of its orientation: its three slots sorted,
