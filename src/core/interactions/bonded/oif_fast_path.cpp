@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 #include <unordered_set>
@@ -95,6 +96,39 @@ inline bool beyond_half(const double* d, int n, double L) {
 }
 
 constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
+
+/** A node's vector (x, y, z, 0) as one register (FusedMembranePlan::Lanes). */
+using Lanes = double __attribute__((vector_size(32)));
+
+/** The x, y, z lanes of four vectors into component arrays, x[0..3] etc.: a
+ *  4 x 4 transpose in registers (seven shuffles, three stores) instead of
+ *  twelve lane extractions, each a store. The gathers of the membrane passes
+ *  turn vectors into the component arrays that their arithmetic vectorises
+ *  over; done lane by lane they were bound by the stores. */
+inline void store_components(const Lanes& v0, const Lanes& v1, const Lanes& v2, const Lanes& v3,
+                             double* x, double* y, double* z) {
+#if defined(__clang__)
+  const Lanes t0 = __builtin_shufflevector(v0, v1, 0, 4, 2, 6);
+  const Lanes t1 = __builtin_shufflevector(v0, v1, 1, 5, 3, 7);
+  const Lanes t2 = __builtin_shufflevector(v2, v3, 0, 4, 2, 6);
+  const Lanes t3 = __builtin_shufflevector(v2, v3, 1, 5, 3, 7);
+  const Lanes cx = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  const Lanes cy = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  const Lanes cz = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+#else
+  using Mask = long long __attribute__((vector_size(32)));
+  const Lanes t0 = __builtin_shuffle(v0, v1, Mask{0, 4, 2, 6}); // x0 x1 z0 z1
+  const Lanes t1 = __builtin_shuffle(v0, v1, Mask{1, 5, 3, 7}); // y0 y1 -  -
+  const Lanes t2 = __builtin_shuffle(v2, v3, Mask{0, 4, 2, 6}); // x2 x3 z2 z3
+  const Lanes t3 = __builtin_shuffle(v2, v3, Mask{1, 5, 3, 7}); // y2 y3 -  -
+  const Lanes cx = __builtin_shuffle(t0, t2, Mask{0, 1, 4, 5});
+  const Lanes cy = __builtin_shuffle(t1, t3, Mask{0, 1, 4, 5});
+  const Lanes cz = __builtin_shuffle(t0, t2, Mask{2, 3, 6, 7});
+#endif
+  std::memcpy(x, &cx, sizeof cx);
+  std::memcpy(y, &cy, sizeof cy);
+  std::memcpy(z, &cz, sizeof cz);
+}
 
 /** Per-block arrays of the edge pass (structure of arrays). */
 struct EdgeBlock {
@@ -1133,7 +1167,24 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   for (int first = 0; first < n_tri; first += kBlock) {
     const int nb = std::min(kBlock, n_tri - first);
     double ra[3][kBlock];
-    for (int k = 0; k < nb; ++k) {
+    int k0 = 0;
+    for (; k0 + 4 <= nb; k0 += 4) { // four triangles at a time (store_components)
+      Lanes e1[4], e2[4], a[4];
+      for (int j = 0; j < 4; ++j) {
+        const int q = first + k0 + j;
+        const Lanes pa = x[v0[q]].v;
+        e1[j] = x[v1[q]].v - pa;
+        e2[j] = x[v2[q]].v - pa;
+        a[j] = pa - origin;
+        edge1[q].v = e1[j];
+        edge2[q].v = e2[j];
+      }
+      const int q = first + k0;
+      store_components(e1[0], e1[1], e1[2], e1[3], e1x + q, e1y + q, e1z + q);
+      store_components(e2[0], e2[1], e2[2], e2[3], e2x + q, e2y + q, e2z + q);
+      store_components(a[0], a[1], a[2], a[3], ra[0] + k0, ra[1] + k0, ra[2] + k0);
+    }
+    for (int k = k0; k < nb; ++k) {
       const int q = first + k;
       const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, a = pa - origin;
       edge1[q].v = e1;
@@ -1207,7 +1258,30 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     const int nb = std::min(kBlock, r.edge_end - first);
     const int *const eb = m_edge_b.data() + first, *const ea = m_edge_a.data() + first,
                      *const ec = m_edge_c.data() + first, *const ed = m_edge_d.data() + first;
-    for (int k = 0; k < nb; ++k) {
+    int k0 = 0;
+    for (; k0 + 4 <= nb; k0 += 4) { // four edges at a time (store_components)
+      Lanes e[4], u[4], w[4], dv[4];
+      for (int j = 0; j < 4; ++j) {
+        const int k = k0 + j;
+        const Lanes xb = x[eb[k]].v;
+        e[j] = x[ec[k]].v - xb;
+        if (wings) {
+          u[j] = x[ea[k]].v - xb;
+          w[j] = x[ed[k]].v - xb;
+        }
+        if (velocities)
+          dv[j] = v[ec[k]].v - v[eb[k]].v;
+      }
+      store_components(e[0], e[1], e[2], e[3], blk.e[0] + k0, blk.e[1] + k0, blk.e[2] + k0);
+      if (wings) {
+        store_components(u[0], u[1], u[2], u[3], blk.u[0] + k0, blk.u[1] + k0, blk.u[2] + k0);
+        store_components(w[0], w[1], w[2], w[3], blk.w[0] + k0, blk.w[1] + k0, blk.w[2] + k0);
+      }
+      if (velocities)
+        store_components(dv[0], dv[1], dv[2], dv[3], blk.dv[0] + k0, blk.dv[1] + k0,
+                         blk.dv[2] + k0);
+    }
+    for (int k = k0; k < nb; ++k) {
       const Lanes xb = x[eb[k]].v, e = x[ec[k]].v - xb;
       for (int d = 0; d < 3; ++d)
         blk.e[d][k] = e[d];
