@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 namespace pyoif {
 
@@ -279,24 +280,29 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // the positions are at hand (the particle arrays do not stay in cache
   // between passes: the lattice update streams through in between). The
   // arithmetic is that of separate passes, (v + h f) + h f, bit for bit.
+  // One mass for all (the usual case: a cell's nodes share theirs) and no
+  // external forces spare the pass two of its input streams.
   const std::size_t n = p.n_local();
   std::vector<double> half_kick(n);
-  bool any_fixed = false;
+  bool any_fixed = false, one_mass = true, any_external = false;
   for (std::size_t i = 0; i < n; ++i) {
     half_kick[i] = 0.5 * dt / p.mass[i];
     any_fixed |= p.fixed[i] != 0;
+    one_mass &= half_kick[i] == half_kick[0];
+    any_external |= !(p.ext_force[i].array() == 0.0).all();
   }
   // kicks half kicks (1 or 2), then the drift; returns the displacement test
   // (1: some particle moved beyond the skin or a re-sort is due anyway, 0:
   // none) or -1 when a position is not finite (prepare_step then names it)
-  auto advance = [&](auto kicks) {
+  auto advance_with = [&](auto kicks, auto uniform, auto external) {
     constexpr int n_kicks = decltype(kicks)::value;
     const Vec3* const x0 = cells.displacement_reference(n);
     const double limit2 = cells.displacement_limit2();
+    const double h0 = n > 0 ? half_kick[0] : 0.0;
     double worst2 = 0.0;
     bool runaway = false;
     for (std::size_t i = 0; i < n; ++i) {
-      const double h = half_kick[i];
+      const double h = decltype(uniform)::value ? h0 : half_kick[i];
       const Vec3 f = p.force[i];
       Vec3 v = p.vel[i];
       Vec3 x = p.pos[i];
@@ -315,13 +321,24 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
       }
       p.vel[i] = v;
       p.pos[i] = x;
-      if (n_kicks == 2)
-        p.force[i] = p.ext_force[i];
+      if constexpr (n_kicks == 2) {
+        if constexpr (decltype(external)::value)
+          p.force[i] = p.ext_force[i];
+        else
+          p.force[i].setZero();
+      }
       if (x0)
         worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
       runaway |= cells.runaway(x);
     }
     return runaway ? -1 : (!x0 || worst2 > limit2) ? 1 : 0;
+  };
+  auto advance = [&](auto kicks) {
+    using yes = std::true_type;
+    using no = std::false_type;
+    if (one_mass)
+      return any_external ? advance_with(kicks, yes{}, yes{}) : advance_with(kicks, yes{}, no{});
+    return any_external ? advance_with(kicks, no{}, yes{}) : advance_with(kicks, no{}, no{});
   };
   auto second_kick = [&] {
     for (std::size_t i = 0; i < n; ++i)
