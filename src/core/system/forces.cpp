@@ -263,12 +263,10 @@ Energies System::compute_energies() {
 void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (n_steps < 0)
     throw InputError("steps must be a non-negative integer, got " + std::to_string(n_steps));
-  // tau against the time step and box (no set_time_step: it would mark the
-  // forces stale, and recomputing them at every call made a run split into
-  // calls differ from one long run -- the coupling force of the last step
-  // recomputed against the fluid of the next)
-  if (lb)
+  if (lb) {
+    set_time_step(m_time_step); // re-checks tau against the time step
     lb->validate(box, m_time_step);
+  }
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();
