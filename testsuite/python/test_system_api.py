@@ -44,6 +44,30 @@ class SystemApi(unittest.TestCase):
         s.integrator.run(4)
         self.assertAlmostEqual(s.time, 2.0)
 
+    def test_run_after_setting_a_position_starts_from_new_forces(self):
+        # a bond stretched between two runs: the next run's first half kick
+        # must use the stretched bond's force, as a system built stretched
+        def system_with_bond(x1):
+            s = lbmd.System(box_l=[10.0, 10.0, 10.0])
+            s.time_step = 0.01
+            bond = lbmd.interactions.HarmonicBond(k=10.0, r_0=1.0)
+            s.bonded_inter.add(bond)
+            a = s.part.add(pos=[2.0, 5.0, 5.0])
+            b = s.part.add(pos=[x1, 5.0, 5.0])
+            a.add_bond((bond, b))
+            return s, b
+        moved, b = system_with_bond(3.0)
+        moved.integrator.run(1)
+        b.pos = [4.5, 5.0, 5.0]
+        b.v = [0.0, 0.0, 0.0]
+        moved.part.by_id(0).pos = [2.0, 5.0, 5.0]
+        moved.part.by_id(0).v = [0.0, 0.0, 0.0]
+        moved.integrator.run(1)
+        fresh, b_fresh = system_with_bond(4.5)
+        fresh.integrator.run(1)
+        np.testing.assert_allclose(b.pos, b_fresh.pos, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(b.v, b_fresh.v, rtol=0, atol=1e-14)
+
     def test_features(self):
         lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])
         self.assertTrue(lbmd.has_features("LB_BOUNDARIES"))

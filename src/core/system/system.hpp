@@ -97,6 +97,10 @@ public:
   void compute_forces();
   Energies compute_energies();
   Vec3 particle_momentum() const;
+  /** The forces of the last step no longer hold (a particle's position,
+   *  velocity, external force or type was set): the next run recomputes
+   *  them before its first half kick. */
+  void invalidate_forces() { m_forces_valid = false; }
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;
 

@@ -72,8 +72,8 @@ void set_vectors(System& s, const std::string& field, const IdArray& ids, const 
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const Vec3 v(r(n, 0), r(n, 1), r(n, 2));
     if (!v.allFinite())
-      throw InputError(field + ": values must be finite (particle " +
-                       std::to_string(p.id[idx[n]]) + ")");
+      throw InputError(field + ": values must be finite (particle " + std::to_string(p.id[idx[n]]) +
+                       ")");
     const int i = idx[n];
     if (field == "pos") {
       p.pos[i] = v;
@@ -88,6 +88,8 @@ void set_vectors(System& s, const std::string& field, const IdArray& ids, const 
     else
       throw InputError("property '" + field + "' cannot be set");
   }
+  if (field != "f") // forces set by hand are the ones to start from
+    s.invalidate_forces();
 }
 
 py::array get_scalars(const System& s, const std::string& field, const IdArray& ids) {
@@ -141,6 +143,8 @@ void set_scalars(System& s, const std::string& field, const IdArray& ids, const 
     else
       throw InputError("property '" + field + "' cannot be set");
   }
+  if (field == "type" || field == "mol_id") // the interactions that apply change
+    s.invalidate_forces();
 }
 
 IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const RealArray& vel,
@@ -158,9 +162,10 @@ IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const
   IdArray out(n);
   auto w = out.mutable_unchecked<1>();
   for (py::ssize_t i = 0; i < n; ++i)
-    w(i) = s.add_particle(id_r(i), Vec3(p_r(i, 0), p_r(i, 1), p_r(i, 2)),
-                          Vec3(v_r(i, 0), v_r(i, 1), v_r(i, 2)), m_r(i), t_r(i), mol_r(i),
-                          Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)), static_cast<std::uint8_t>(fix_r(i)));
+    w(i) =
+        s.add_particle(id_r(i), Vec3(p_r(i, 0), p_r(i, 1), p_r(i, 2)),
+                       Vec3(v_r(i, 0), v_r(i, 1), v_r(i, 2)), m_r(i), t_r(i), mol_r(i),
+                       Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)), static_cast<std::uint8_t>(fix_r(i)));
   return out;
 }
 
@@ -190,7 +195,7 @@ std::vector<std::tuple<int, int>> get_pairs(System& s, double distance) {
   return out;
 }
 
-}  // namespace
+} // namespace
 
 void bind_system(py::module_& m) {
   py::class_<LangevinParams>(m, "LangevinParams")
@@ -266,4 +271,4 @@ void bind_system(py::module_& m) {
            [](const System& s) -> Vec3 { return s.lb ? s.lb->total_momentum() : Vec3::Zero(); });
 }
 
-}  // namespace pyoif::python
+} // namespace pyoif::python
