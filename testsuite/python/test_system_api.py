@@ -68,6 +68,21 @@ class SystemApi(unittest.TestCase):
         np.testing.assert_allclose(b.pos, b_fresh.pos, rtol=0, atol=1e-14)
         np.testing.assert_allclose(b.v, b_fresh.v, rtol=0, atol=1e-14)
 
+    def test_run_after_switching_a_thermostat_starts_from_new_forces(self):
+        # Langevin friction (kT 0) switched on between two runs: the second
+        # run's first half kick already feels -gamma v (velocity Verlet with
+        # the force recomputed at its start)
+        s = lbmd.System(box_l=[10.0, 10.0, 10.0])
+        s.time_step = dt = 0.01
+        p = s.part.add(pos=[5.0, 5.0, 5.0], v=[1.0, 0.0, 0.0], mass=2.0)
+        s.integrator.run(1)
+        gamma, m, v1 = 3.0, 2.0, 1.0
+        s.thermostat.set_langevin(kT=0.0, gamma=gamma)
+        s.integrator.run(1)
+        v_half = v1 + 0.5 * dt * (-gamma * v1) / m
+        v2 = v_half + 0.5 * dt * (-gamma * v_half) / m
+        self.assertAlmostEqual(p.v[0], v2, delta=1e-14)
+
     def test_features(self):
         lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])
         self.assertTrue(lbmd.has_features("LB_BOUNDARIES"))

@@ -263,10 +263,12 @@ Energies System::compute_energies() {
 void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (n_steps < 0)
     throw InputError("steps must be a non-negative integer, got " + std::to_string(n_steps));
-  if (lb) {
-    set_time_step(m_time_step); // re-checks tau against the time step
+  // tau against the time step and box (not set_time_step, which marks the
+  // forces stale: recomputing them at every call made a run split into
+  // calls differ from one run -- the last step's coupling force recomputed
+  // against the fluid updated since)
+  if (lb)
     lb->validate(box, m_time_step);
-  }
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();

@@ -73,7 +73,10 @@ public:
 
   // --- interactions -----------------------------------------------------------
   NonbondedTable nonbonded;
-  void on_interactions_changed() { cells.invalidate(); }
+  void on_interactions_changed() {
+    cells.invalidate();
+    m_forces_valid = false;
+  }
   std::vector<BondedEntry> bonded; ///< index = bonded interaction id
   int add_bonded_interaction(const BondedInteraction& ia);
   /** Adds bonds of interaction `bond_id`: ids is n_bonds * n_particles ids,
@@ -98,8 +101,9 @@ public:
   Energies compute_energies();
   Vec3 particle_momentum() const;
   /** The forces of the last step no longer hold (a particle's position,
-   *  velocity, external force or type was set): the next run recomputes
-   *  them before its first half kick. */
+   *  velocity, external force or type was set, a constraint, thermostat or
+   *  exclusion changed): the next run recomputes them before its first half
+   *  kick. */
   void invalidate_forces() { m_forces_valid = false; }
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;

@@ -173,10 +173,12 @@ void bind_interactions(py::module_& m) {
   sys.def("add_constraint",
           [](System& s, std::shared_ptr<ShapeBasedConstraint> c) {
             s.constraints.push_back(std::move(c));
+            s.invalidate_forces();
           })
       .def("remove_constraint", [](System& s, const std::shared_ptr<ShapeBasedConstraint>& c) {
         auto& v = s.constraints;
         v.erase(std::remove(v.begin(), v.end(), c), v.end());
+        s.invalidate_forces();
       });
 }
 

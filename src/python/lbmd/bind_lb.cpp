@@ -195,8 +195,13 @@ void bind_lb(py::module_& m) {
                throw InputError("gamma must be a finite number >= 0");
              s.lb_coupling.active = true;
              s.lb_coupling.params = {gamma, s.lb->params().kT, seed};
+             s.invalidate_forces();
            })
-      .def("set_lb_coupling_off", [](System& s) { s.lb_coupling.active = false; })
+      .def("set_lb_coupling_off",
+           [](System& s) {
+             s.lb_coupling.active = false;
+             s.invalidate_forces();
+           })
       .def("lb_interpolated_velocity", [](const System& s, const Vec3& pos) -> Vec3 {
         if (!s.lb)
           throw InputError("no lattice-Boltzmann fluid is active");
