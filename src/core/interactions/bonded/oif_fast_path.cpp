@@ -97,9 +97,6 @@ inline bool beyond_half(const double* d, int n, double L) {
 
 constexpr int kBlock = 64; ///< bonds or triangles per block (arrays stay in L1)
 
-/** A node's vector (x, y, z, 0) as one register (FusedMembranePlan::Lanes). */
-using Lanes = double __attribute__((vector_size(32)));
-
 /** The x, y, z lanes of four vectors into component arrays, x[0..3] etc.: a
  *  4 x 4 transpose in registers (seven shuffles, three stores) instead of
  *  twelve lane extractions, each a store. The gathers of the membrane passes

@@ -72,6 +72,10 @@
 
 namespace pyoif::oif {
 
+/** A node's vector (x, y, z, 0) as one 4-lane register (GCC/Clang vector
+ *  extension): the fused membrane pass keeps a cell's nodes in this form. */
+using Lanes = double __attribute__((vector_size(32)));
+
 template <class IA>
 constexpr bool has_fast_path =
     std::is_same_v<IA, OifLocalForces> || std::is_same_v<IA, OifGlobalForces> ||
@@ -301,10 +305,9 @@ private:
 
   static constexpr int kNodeArrays = 4;      ///< x, v, f, normal sum
   static constexpr int kTriangleArrays = 13; ///< e1, e2, N: 3 each; area, volume, g, c
-  /** A node's vector as one 4-lane register (x, y, z, 0): the scatters add a
-   *  bond's force to a node with one load, add and store instead of three
-   *  (the passes are bound by stores), the gathers load a node at once. */
-  using Lanes = double __attribute__((vector_size(32)));
+  /** A node as one 4-lane register (Lanes): the scatters add a bond's force
+   *  to a node with one load, add and store instead of three (the passes are
+   *  bound by stores), the gathers load a node at once. */
   struct alignas(32) Node4 {
     Lanes v;
   };
