@@ -125,7 +125,6 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     ledger.stencil_entries.resize(8 * n);
     ledger.layout_version = p.layout_version;
     ledger.numbered_step = step;
-    ledger.n_valid = 0; // the velocities are stored by the old numbers
   }
   CompactStencil* const stencils = ledger.stencils.data();
   std::uint32_t* const entries = ledger.stencil_entries.data();

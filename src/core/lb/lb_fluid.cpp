@@ -188,7 +188,6 @@ LBFluid::~LBFluid() {
 }
 
 void LBFluid::normalize_layout() {
-  ++m_state_version;
   if (!m_swapped)
     return;
   // pre-collision populations of every fluid node, gathered from their
@@ -227,7 +226,6 @@ void LBFluid::set_ext_force_density(const Vec3& f) {
   require(f.allFinite(), "ext_force_density must be finite");
   m_p.ext_force_density = f;
   m_ext_lattice = f * m_p.tau * m_p.tau / m_p.agrid;
-  ++m_state_version;
 }
 
 void LBFluid::validate(const BoxGeometry& box, double time_step) const {
@@ -284,7 +282,6 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
 }
 
 void LBFluid::rebuild_geometry() {
-  ++m_state_version;
   // ghost flags: periodic images of the domain's
   for (int x = 0; x < m_pad[0]; ++x)
     for (int y = 0; y < m_pad[1]; ++y)
@@ -332,7 +329,6 @@ void LBFluid::rebuild_geometry() {
     m_bounce_back.push_back(
         {l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, l.wall_term});
   build_halo_pairs();
-  build_late_mask();
   m_field.clear();
   m_field_chunk.clear();
   m_field_used = false;
@@ -374,7 +370,7 @@ double LBFluid::node_density(const Vec3i& node) const {
     return m_p.density;
   double rho;
   Vec3 j;
-  moments(read_offset(), n, rho, j);
+  moments(n, rho, j);
   return rho;
 }
 
@@ -410,7 +406,6 @@ Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
 }
 
 void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
-  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the populations of a boundary node");
   for (int q = 0; q < Q; ++q)
@@ -420,7 +415,6 @@ void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
-  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the density or velocity of a boundary node");
   require(std::isfinite(rho) && rho > 0.0, "density must be a finite number > 0");
@@ -450,72 +444,14 @@ void LBFluid::compute_coupling_velocities() {
   m_ledger.node_coupling.resize(count);
   auto* out = m_ledger.node_coupling.data();
   const std::uint32_t* entry = m_ledger.compact.data();
-  // the list's first n_valid nodes still have the velocities the last
-  // update computed (step); the nodes appended since follow them
-  const std::size_t first =
-      m_ledger.valid_version == m_state_version ? std::min(m_ledger.n_valid, count) : 0;
-  for (std::size_t i = 0; i < count; ++i)
-    out[i].impulse = Vec3::Zero();
-  for (std::size_t i = first; i < count; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     if (i + ahead < count) {
       const double* f = m_f + nodes[i + ahead];
       for (int q = 0; q < Q; ++q)
         __builtin_prefetch(f + off[q], 0, 1);
     }
-    out[entry[nodes[i]]].velocity = velocity_at_index(nodes[i]);
+    out[entry[nodes[i]]] = {velocity_at_index(nodes[i]), Vec3::Zero()};
   }
-  m_ledger.n_valid = count;
-  m_ledger.valid_version = m_state_version;
-}
-
-void LBFluid::build_late_mask() {
-  m_late.assign((m_stride + 63) / 64, ~std::uint64_t{0});
-  for (const Run& r : m_runs)
-    for (int i = 0; i < r.length; ++i) {
-      const std::size_t n = r.start + static_cast<std::size_t>(i);
-      const Vec3i pc = padded_coordinates(n);
-      bool interior = true;
-      for (int d = 0; d < 3; ++d)
-        interior &= pc[d] > 1 && pc[d] < m_n[d];
-      for (int q = 1; q < Q && interior; ++q)
-        interior = m_flag[n + m_offset[q]] == 0;
-      if (interior)
-        m_late[n >> 6] &= ~(std::uint64_t{1} << (n & 63));
-    }
-}
-
-void LBFluid::feed_coupling_velocities(std::size_t lo, std::size_t hi, const std::ptrdiff_t* off,
-                                       bool interior) {
-  const std::uint64_t* needed = m_ledger.needed.data();
-  const std::uint32_t* entry = m_ledger.compact.data();
-  auto* out = m_ledger.node_coupling.data();
-  for (std::size_t word = lo >> 6; word < (hi + 63) >> 6; ++word) {
-    std::uint64_t bits = needed[word];
-    if (interior)
-      bits &= ~m_late[word];
-    if (word == lo >> 6)
-      bits &= ~std::uint64_t{0} << (lo & 63);
-    if (word == (hi - 1) >> 6 && (hi & 63))
-      bits &= ~std::uint64_t{0} >> (64 - (hi & 63));
-    for (; bits; bits &= bits - 1) {
-      const std::size_t n = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
-      out[entry[n]].velocity =
-          m_flag[n] ? m_boundaries[m_flag[n] - 1].velocity : fluid_velocity(off, n);
-    }
-  }
-}
-
-void LBFluid::finish_coupling_velocities(const std::vector<char>& fed_plane) {
-  const std::uint64_t* needed = m_ledger.needed.data();
-  const std::uint32_t* entry = m_ledger.compact.data();
-  auto* out = m_ledger.node_coupling.data();
-  const std::size_t plane = static_cast<std::size_t>(m_pad[0]) * m_pad[1];
-  for (std::size_t word = 0; word < m_ledger.needed.size(); ++word)
-    for (std::uint64_t bits = needed[word]; bits; bits &= bits - 1) {
-      const std::size_t n = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
-      if ((m_late[word] >> (n & 63) & 1) || !fed_plane[n / plane])
-        out[entry[n]].velocity = velocity_at_index(n);
-    }
 }
 
 double LBFluid::total_mass() const {

@@ -213,13 +213,6 @@ public:
       Vec3 impulse;  ///< this pass's deposit, field units (see add_field_impulse)
     };
     std::vector<NodeCoupling> node_coupling;
-    /// node_coupling[e].velocity is that of the fluid's current state for
-    /// the entries e < n_valid while the fluid's state_version() equals
-    /// valid_version: the lattice update computes them for every listed
-    /// node (see LBFluid::step), so a coupling pass computes only the nodes
-    /// it appended since; a renumbering sets n_valid to 0
-    std::size_t n_valid = 0;
-    std::uint64_t valid_version = ~std::uint64_t{0};
     std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
     std::vector<Stencil> stencils;                       ///< per particle of the current pass
     std::vector<std::uint32_t> stencil_entries;          ///< compact entries, 8 per particle
@@ -227,13 +220,8 @@ public:
   CouplingLedger& coupling_ledger() { return m_ledger; }
   /** For each node n of the ledger's list (`node`, mostly in increasing
    *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
-   *  with the populations of nodes further down the list prefetched; the
-   *  velocities of the first n_valid entries are kept when they are of the
-   *  current state (CouplingLedger::valid_version), only the impulses zeroed. */
+   *  with the populations of nodes further down the list prefetched. */
   void compute_coupling_velocities();
-  /** Changes whenever the populations, the boundaries or ext_force_density
-   *  change (every update, every setter). */
-  std::uint64_t state_version() const { return m_state_version; }
 
   // --- output -----------------------------------------------------------------
   void write_vtk_velocity(const std::string& path) const;
@@ -288,20 +276,7 @@ private:
   template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
   bool update_run(const Run& r, double* f, BadNode& bad);
   [[noreturn]] void report_instability(const BadNode& bad) const;
-  /** Density and momentum of fluid node n, its populations located by `off`
-   *  (read_offset() of the layout they are in). */
-  inline void moments(const std::ptrdiff_t* off, std::size_t n, double& rho, Vec3& j) const;
-  /** velocity_at_index of fluid node n, populations located by `off`. */
-  inline Vec3 fluid_velocity(const std::ptrdiff_t* off, std::size_t n) const;
-  /** Coupling velocities of the ledger's nodes with padded index in [lo, hi)
-   *  (interior nodes only if `interior`; see m_late) into their compact
-   *  entries, populations located by `off`. */
-  void feed_coupling_velocities(std::size_t lo, std::size_t hi, const std::ptrdiff_t* off,
-                                bool interior);
-  /** After an update: the ledger nodes feed_coupling_velocities did not
-   *  reach during it (late nodes, planes marked in `fed_plane`). */
-  void finish_coupling_velocities(const std::vector<char>& fed_plane);
-  void build_late_mask();
+  inline void moments(std::size_t n, double& rho, Vec3& j) const;
 
   LBParams m_p;
   Relaxation m_relax{};
@@ -344,52 +319,39 @@ private:
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
   std::array<std::array<double, d3q19::Q>, d3q19::Q> m_basis{};
   std::uint64_t m_updates = 0;
-  std::uint64_t m_state_version = 0;
-  /// one bit per padded node: set unless a fluid node all of whose 18
-  /// neighbours are fluid domain nodes. Only those "interior" nodes have
-  /// their final populations once the kernel has updated their neighbours;
-  /// the others receive some from the halo exchange or the bounce-back.
-  std::vector<std::uint64_t> m_late;
   CouplingLedger m_ledger;
   int m_threads = 1;
 };
 
 // Inline: the coupling's velocity pass calls these once per lattice node it
 // needs, so the 19 sums belong in its loop.
-inline void LBFluid::moments(const std::ptrdiff_t* off, std::size_t n, double& rho, Vec3& j) const {
-  // The sums as balanced trees over the pairs of opposite velocities (q,
-  // q + 1 for odd q in d3q19::c): five additions deep instead of a chain of
-  // nineteen, so the sums of successive nodes are not waiting on one another.
+inline void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
+  // the 19 loads with the layout's offsets, the velocity components known at
+  // compile time after unrolling, so the zero ones drop out
+  const std::ptrdiff_t* off = read_offset();
   const double* f = m_f + n;
-  double v[d3q19::Q];
-  for (int q = 0; q < d3q19::Q; ++q)
-    v[q] = f[off[q]];
-  double sum[d3q19::Q], diff[d3q19::Q]; // of the pairs, at the odd index
-  for (int q = 1; q < d3q19::Q; q += 2) {
-    sum[q] = v[q] + v[q + 1];
-    diff[q] = v[q] - v[q + 1];
+  double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
+#pragma GCC unroll 19
+  for (int q = 0; q < d3q19::Q; ++q) {
+    const double v = f[off[q]];
+    r += v;
+    if (d3q19::c[q][0])
+      jx += d3q19::c[q][0] * v;
+    if (d3q19::c[q][1])
+      jy += d3q19::c[q][1] * v;
+    if (d3q19::c[q][2])
+      jz += d3q19::c[q][2] * v;
   }
-  static_assert(d3q19::c[7][0] == 1 && d3q19::c[7][1] == 1 && d3q19::c[9][1] == -1 &&
-                    d3q19::c[11][2] == 1 && d3q19::c[13][2] == -1 && d3q19::c[15][1] == 1 &&
-                    d3q19::c[15][2] == 1 && d3q19::c[17][2] == -1,
-                "the pairs below follow d3q19::c");
-  rho = ((v[0] + sum[1]) + (sum[3] + sum[5])) + ((sum[7] + sum[9]) + (sum[11] + sum[13])) +
-        (sum[15] + sum[17]);
-  j = Vec3((diff[1] + diff[7]) + (diff[9] + diff[11]) + diff[13],
-           (diff[3] + diff[7]) - (diff[9] - diff[15]) + diff[17],
-           (diff[5] + diff[11]) - (diff[13] - diff[15]) - diff[17]);
+  rho = r;
+  j = Vec3(jx, jy, jz);
 }
 
 inline Vec3 LBFluid::velocity_at_index(std::size_t n) const {
   if (m_flag[n])
     return m_boundaries[m_flag[n] - 1].velocity;
-  return fluid_velocity(read_offset(), n);
-}
-
-inline Vec3 LBFluid::fluid_velocity(const std::ptrdiff_t* off, std::size_t n) const {
   double rho;
   Vec3 j;
-  moments(off, n, rho, j);
+  moments(n, rho, j);
   const double scale = m_p.agrid / m_p.tau / rho;
   return Vec3((j[0] + 0.5 * m_ext_lattice[0]) * scale, (j[1] + 0.5 * m_ext_lattice[1]) * scale,
               (j[2] + 0.5 * m_ext_lattice[2]) * scale);

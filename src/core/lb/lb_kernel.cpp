@@ -28,11 +28,6 @@
 #include <sstream>
 #include <type_traits>
 #include <utility>
-#include <vector>
-
-#ifdef PYOIF_WITH_OPENMP
-#include <omp.h>
-#endif
 
 #if defined(__AVX512F__) && !defined(__clang__)
 // 8-wide vectors halve the instruction count of the collision (32 registers)
@@ -449,51 +444,18 @@ void LBFluid::step() {
     return field ? update_run<false, true, false, false>(r, f, b)
                  : update_run<false, false, false, false>(r, f, b);
   };
-  // The particle coupling's node velocities (CouplingLedger) of the state
-  // this update leaves are computed here, while the populations are still in
-  // cache; the coupling pass would read them back from memory, 19 lines per
-  // node. An interior node's populations (m_late) are final once the kernel
-  // has updated its 18 neighbours: the runs go plane by plane in memory
-  // order, so a plane is fed when the update reaches the plane two further
-  // on. The late nodes, the last planes and those at the edges of the
-  // threads' shares are fed after the bounce-back.
-  ++m_state_version;
-  auto& ledger = m_ledger;
-  ledger.n_valid = 0;
-  const bool feed = ledger.n_nodes > 0 && ledger.needed.size() == m_late.size() &&
-                    ledger.node_coupling.size() >= ledger.n_nodes;
-  const std::size_t plane = static_cast<std::size_t>(m_pad[0]) * m_pad[1];
-  std::vector<char> fed_plane(feed ? static_cast<std::size_t>(m_pad[2]) : 0, 0);
-  const std::ptrdiff_t* off_after = even ? m_read_swapped.data() : m_read_normal.data();
 #ifdef PYOIF_WITH_OPENMP
-#pragma omp parallel num_threads(m_threads)
+#pragma omp parallel for schedule(static) num_threads(m_threads)
 #endif
-  {
-#ifdef PYOIF_WITH_OPENMP
-    const long thread = omp_get_thread_num(), n_shares = omp_get_num_threads();
-#else
-    const long thread = 0, n_shares = 1;
-#endif
-    // contiguous shares of the runs (as a static schedule)
-    const long begin = n_runs * thread / n_shares, end = n_runs * (thread + 1) / n_shares;
-    // the first plane this share updates whole is the one after its first
-    // run's; a plane is fed once it, the one before and the one after are
-    std::size_t next_fed = begin < end ? m_runs[begin].start / plane + 2 : 0;
-    for (long i = begin; i < end; ++i) {
-      if (feed)
-        for (const std::size_t z = m_runs[i].start / plane; next_fed + 1 < z; ++next_fed) {
-          feed_coupling_velocities(next_fed * plane, (next_fed + 1) * plane, off_after, true);
-          fed_plane[next_fed] = 1;
-        }
-      BadNode b;
-      if (update(m_runs[i], b)) {
+  for (long i = 0; i < n_runs; ++i) {
+    BadNode b;
+    if (update(m_runs[i], b)) {
 #ifdef PYOIF_WITH_OPENMP
 #pragma omp critical(pyoif_lb_bad_node)
 #endif
-        if (i < first_bad) {
-          first_bad = i;
-          bad_node = b;
-        }
+      if (i < first_bad) {
+        first_bad = i;
+        bad_node = b;
       }
     }
   }
@@ -503,11 +465,6 @@ void LBFluid::step() {
   m_swapped = even;
   halo_exchange(f, even);
   apply_bounce_back(f);
-  if (feed) {
-    finish_coupling_velocities(fed_plane);
-    ledger.n_valid = ledger.n_nodes;
-    ledger.valid_version = m_state_version;
-  }
   if (field) { // the kernel cleared the field of every fluid node in a marked chunk
     std::fill(m_field_chunk.begin(), m_field_chunk.end(), std::uint8_t{0});
     m_field_used = false;
