@@ -279,6 +279,13 @@ class Instability(unittest.TestCase):
         with self.assertRaisesRegex(lbmd.SimulationInstability,
                                     r"node \(2, 3, 4\) in lattice update 0"):
             s.integrator.run(2)
+        # the failed update stopped half way: the fluid takes no more updates
+        # (its populations mix two time levels), but can still be read
+        with self.assertRaisesRegex(lbmd.SimulationInstability,
+                                    r"not usable: an earlier update failed .*node \(2, 3, 4\) in "
+                                    r"lattice update 0.*create a new fluid"):
+            s.integrator.run(2)
+        self.assertEqual(lbf[2, 3, 4].velocity.shape, (3,))
 
     def test_supersonic_node_odd_update(self):
         s = system()

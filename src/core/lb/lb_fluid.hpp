@@ -101,7 +101,8 @@ public:
   /** One lattice update: collide with the force density accumulated since the
    *  last update (+ ext_force_density), stream, bounce back; clear the force
    *  field. Throws SimulationInstability naming node and update on a
-   *  non-positive or non-finite density or a speed >= the lattice sound speed. */
+   *  non-positive or non-finite density or a speed >= the lattice sound speed;
+   *  that update is abandoned half done, and every later call throws too. */
   void step();
   /** Momentum of the populations plus the impulse accumulated in the force
    *  field that the next update will apply (particle coupling), minus the
@@ -275,7 +276,9 @@ private:
   void halo_exchange(double* f, bool fill_ghosts) const;
   template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
   bool update_run(const Run& r, double* f, BadNode& bad);
-  [[noreturn]] void report_instability(const BadNode& bad) const;
+  /** Throws SimulationInstability for the bad node; step() refuses to run
+   *  after it (m_failed_update). */
+  [[noreturn]] void report_instability(const BadNode& bad);
   inline void moments(std::size_t n, double& rho, Vec3& j) const;
 
   LBParams m_p;
@@ -319,6 +322,9 @@ private:
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
   std::array<std::array<double, d3q19::Q>, d3q19::Q> m_basis{};
   std::uint64_t m_updates = 0;
+  /// the message of the update that found a bad node (empty: none); that
+  /// update was abandoned half done, so the fluid takes no more updates
+  std::string m_failed_update;
   CouplingLedger m_ledger;
   int m_threads = 1;
 };

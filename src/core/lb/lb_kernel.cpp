@@ -399,7 +399,7 @@ void LBFluid::apply_bounce_back(double* f) const {
       f[b.fluid_slot] = f[b.solid_slot] - b.wall_term;
 }
 
-void LBFluid::report_instability(const BadNode& bad) const {
+void LBFluid::report_instability(const BadNode& bad) {
   const std::size_t n = bad.node;
   const Vec3i pc = padded_coordinates(n);
   const int x = pc[0] - 1, y = pc[1] - 1, z = pc[2] - 1;
@@ -410,10 +410,18 @@ void LBFluid::report_instability(const BadNode& bad) const {
       << " lattice units (must stay well below the lattice sound speed 0.577); reduce the "
          "forces or flow speed, or increase visc (relaxation rate "
       << 1.0 - m_relax.shear << ")";
+  m_failed_update = msg.str();
   throw SimulationInstability(msg.str());
 }
 
 void LBFluid::step() {
+  if (!m_failed_update.empty())
+    // the failed update stopped half way: its populations mix two time levels
+    throw SimulationInstability(
+        "lattice-Boltzmann fluid not usable: an earlier update failed and left it half "
+        "updated (" +
+        m_failed_update +
+        "). Its fields can still be read and written out; to go on, create a new fluid");
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;
