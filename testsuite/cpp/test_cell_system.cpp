@@ -16,7 +16,7 @@ using namespace pyoif;
 
 namespace {
 
-using PairKey = std::tuple<int, int, int, int, int>;  // id_a < id_b, image shift of b
+using PairKey = std::tuple<int, int, int, int, int>; // id_a < id_b, image shift of b
 
 // Brute force: every pair and every periodic image of b (|shift| <= 1 per axis,
 // enough while the cutoff is below the box length), counted once.
@@ -39,7 +39,8 @@ std::map<PairKey, int> brute_force(const ParticleStore& p, const BoxGeometry& bo
               continue;
             int a = p.id[i], b = p.id[j];
             Vec3i shift = s;
-            if (a > b || (a == b && (s[0] < 0 || (s[0] == 0 && (s[1] < 0 || (s[1] == 0 && s[2] < 0)))))) {
+            if (a > b ||
+                (a == b && (s[0] < 0 || (s[0] == 0 && (s[1] < 0 || (s[1] == 0 && s[2] < 0)))))) {
               std::swap(a, b);
               shift = -s;
             }
@@ -61,8 +62,9 @@ std::map<PairKey, int> from_cells(const System& s, double cutoff) {
                       ? Vec3i::Zero()
                       : Vec3i(p.ghost_shift[pr[1] - p.n_local()]);
     int a = p.id[ia], b = p.id[ib];
-    if (a > b || (a == b && (shift[0] < 0 || (shift[0] == 0 && (shift[1] < 0 ||
-                                                                  (shift[1] == 0 && shift[2] < 0)))))) {
+    if (a > b ||
+        (a == b &&
+         (shift[0] < 0 || (shift[0] == 0 && (shift[1] < 0 || (shift[1] == 0 && shift[2] < 0)))))) {
       std::swap(a, b);
       shift = -shift;
     }
@@ -78,7 +80,7 @@ struct Case {
   double cutoff, skin;
 };
 
-}  // namespace
+} // namespace
 
 class NeighbourSearch : public ::testing::TestWithParam<Case> {};
 
@@ -94,8 +96,7 @@ TEST_P(NeighbourSearch, MatchesBruteForceExactly) {
       // ids with gaps, to exercise the id -> index map
       s.add_particle(3 * i + trial, x, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
     }
-    s.nonbonded.at(0, 0).get<SoftSphere>() = {1.0, 12.0, c.cutoff, 0.0};
-    s.nonbonded.commit(0, 0);
+    s.set_nonbonded<SoftSphere>(0, 0, {1.0, 12.0, c.cutoff, 0.0});
     s.compute_forces();
     const auto expected = brute_force(s.particles, s.box, c.cutoff);
     const auto found = from_cells(s, c.cutoff);
@@ -132,9 +133,8 @@ TEST(NeighbourSearch, ExclusionsAreHonoured) {
   System s({5, 5, 5}, {true, true, true});
   s.add_particle(0, {1, 1, 1}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
   s.add_particle(1, {1.5, 1, 1}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
-  s.add_particle(2, {4.8, 1, 1}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);  // image at -0.2
-  s.nonbonded.at(0, 0).get<SoftSphere>() = {1.0, 2.0, 1.5, 0.0};
-  s.nonbonded.commit(0, 0);
+  s.add_particle(2, {4.8, 1, 1}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0); // image at -0.2
+  s.set_nonbonded<SoftSphere>(0, 0, {1.0, 2.0, 1.5, 0.0});
   s.compute_forces();
   EXPECT_EQ(s.cells.pairs().size(), 3u);
   s.cells.add_exclusion(2, 0);
@@ -158,7 +158,6 @@ TEST(NeighbourSearch, ExclusionsAreHonoured) {
 TEST(NeighbourSearch, RangeLargerThanBoxIsAnError) {
   System s({2, 10, 10}, {true, true, true});
   s.add_particle(0, {1, 1, 1}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
-  s.nonbonded.at(0, 0).get<SoftSphere>() = {1.0, 2.0, 2.5, 0.0};
-  s.nonbonded.commit(0, 0);
+  s.set_nonbonded<SoftSphere>(0, 0, {1.0, 2.0, 2.5, 0.0});
   EXPECT_THROW(s.compute_forces(), InputError);
 }

@@ -44,8 +44,7 @@ System make_chains(double dt) {
     s.particles.vel[i] -= momentum / total_mass;
   // soft sphere with a cutoff where the potential is negligible (V(rc) = 3.8e-7,
   // so crossing the cutoff does not spoil energy conservation)
-  s.nonbonded.at(0, 0).get<SoftSphere>() = {0.2, 12.0, 3.0, 0.0};
-  s.nonbonded.commit(0, 0);
+  s.set_nonbonded<SoftSphere>(0, 0, {0.2, 12.0, 3.0, 0.0});
   const int bond = s.add_bonded_interaction(HarmonicBond{20.0, 1.3, 0.0});
   std::vector<int> ids;
   for (int c = 0; c < 36; ++c)
@@ -77,7 +76,7 @@ double energy_error(double dt, double duration, double* drift = nullptr) {
   return std::sqrt(sum2 / n_chunks);
 }
 
-}  // namespace
+} // namespace
 
 TEST(VelocityVerlet, EnergyErrorBoundedAndScalesAsTimeStepSquared) {
   // 10^4 steps at dt = 0.002; the same physical time at 2 dt and dt/2.
@@ -129,8 +128,7 @@ TEST(PeriodicImages, PairForceThroughGhostsAndUnfoldedTrajectory) {
   s.set_time_step(0.01);
   s.add_particle(0, {0.2, 3, 3}, {-1.0, 0, 0}, 1.0, 0, 0, Vec3::Zero(), 0);
   s.add_particle(1, {5.3, 3, 3}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
-  s.nonbonded.at(0, 0).get<SoftSphere>() = {1.0, 2.0, 1.5, 0.0};
-  s.nonbonded.commit(0, 0);
+  s.set_nonbonded<SoftSphere>(0, 0, {1.0, 2.0, 1.5, 0.0});
   s.compute_forces();
   // distance through the boundary 0.9: force n a r^-(n+1) = 2 / 0.9^3
   EXPECT_NEAR(s.particles.force[0][0], 2.0 / std::pow(0.9, 3), 1e-12);
@@ -140,4 +138,63 @@ TEST(PeriodicImages, PairForceThroughGhostsAndUnfoldedTrajectory) {
   EXPECT_NEAR(s.particle_momentum()[0], -1.0, 1e-12);
   for (std::size_t i = 0; i < 2; ++i)
     EXPECT_TRUE(s.particles.pos[i][0] > -0.5 && s.particles.pos[i][0] < 6.5);
+}
+
+// A change of the force field between two runs through System's methods
+// (non-bonded parameters, exclusions, thermostat) reaches the next run's
+// first half kick: v(dt) = v(0) + dt/2 (F(x0) + F(x1)) / m with the new F.
+namespace {
+System two_particles_at_rest() {
+  System s({8, 8, 8}, {true, true, true});
+  s.set_time_step(0.01);
+  s.add_particle(0, {3.0, 4.0, 4.0}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
+  s.add_particle(1, {4.0, 4.0, 4.0}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
+  return s;
+}
+/** Soft sphere a / r^2 on particle 0 (pushed to -x) at separation r. */
+double pair_force_x(double r) { return -2.0 / (r * r * r); }
+} // namespace
+
+TEST(ForcesBetweenRuns, NewPairParametersReachTheFirstHalfKick) {
+  System s = two_particles_at_rest();
+  s.integrate(1); // no interaction yet: nothing moves
+  ASSERT_EQ(s.particles.vel[0][0], 0.0);
+  s.set_nonbonded<SoftSphere>(0, 0, {1.0, 2.0, 1.5, 0.0});
+  s.integrate(1);
+  const double r1 = s.particles.pos[1][0] - s.particles.pos[0][0];
+  const double expected = 0.005 * (pair_force_x(1.0) + pair_force_x(r1));
+  // with the old (zero) forces in the first half kick it would be 0.005 F(x1)
+  EXPECT_NEAR(s.particles.vel[0][0], expected, 1e-12);
+}
+
+TEST(ForcesBetweenRuns, NewExclusionReachesTheFirstHalfKick) {
+  System s = two_particles_at_rest();
+  s.set_nonbonded<SoftSphere>(0, 0, {1.0, 2.0, 1.5, 0.0});
+  s.integrate(1);
+  const Vec3 v_before = s.particles.vel[0];
+  s.add_exclusion(0, 1);
+  s.integrate(1);
+  // no force in either half kick (the old force would add 0.005 F)
+  EXPECT_NEAR((s.particles.vel[0] - v_before).norm(), 0.0, 1e-15);
+  s.remove_exclusion(0, 1);
+  const Vec3 x0 = s.particles.pos[0], x1 = s.particles.pos[1];
+  s.integrate(1);
+  const double expected = v_before[0] + 0.005 * (pair_force_x(x1[0] - x0[0]) +
+                                                 pair_force_x(s.particles.pos[1][0] -
+                                                              s.particles.pos[0][0]));
+  EXPECT_NEAR(s.particles.vel[0][0], expected, 1e-12);
+}
+
+TEST(ForcesBetweenRuns, LangevinSwitchedOnReachesTheFirstHalfKick) {
+  System s = two_particles_at_rest();
+  s.particles.vel[0] = Vec3(1.0, 0.0, 0.0);
+  s.invalidate_forces(); // a direct write to the particle store
+  s.integrate(1);        // no friction yet: v stays 1
+  ASSERT_DOUBLE_EQ(s.particles.vel[0][0], 1.0);
+  s.set_langevin({true, 0.0, 2.0, 0}); // kT 0: friction -gamma v only
+  s.integrate(1);
+  // v1 = v0 + dt/2 (-g v0) + dt/2 (-g v_half) with v_half = v0 (1 - g dt/2)
+  // (the velocity the second force evaluation sees)
+  const double g = 2.0, h = 0.005, v0 = 1.0, v_half = v0 - h * g * v0;
+  EXPECT_NEAR(s.particles.vel[0][0], v_half - h * g * v_half, 1e-14);
 }

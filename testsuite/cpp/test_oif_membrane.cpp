@@ -402,9 +402,7 @@ TEST(OifMembrane, CollisionPushesCellsApart) {
     const int id = s->add_bonded_interaction(OifOutDirection{});
     s->add_bonds(id, oif_test::triangle_bond_ids(m, 0), {});
     s->add_bonds(id, oif_test::triangle_bond_ids(m, static_cast<int>(n)), {});
-    s->nonbonded.at(0, 0).get<MembraneCollision>() = {0.01, 10.0, 0.5, 0.0};
-    s->nonbonded.commit(0, 0);
-    s->on_interactions_changed();
+    s->set_nonbonded<MembraneCollision>(0, 0, {0.01, 10.0, 0.5, 0.0});
     const auto f1 = oif_test::forces_of(*s, n, 0);
     const auto f2 = oif_test::forces_of(*s, n, static_cast<int>(n));
     Vec3 total1 = Vec3::Zero(), total2 = Vec3::Zero();

@@ -167,7 +167,7 @@ void System::add_constraint_forces(Energies* e) {
   const double range = nonbonded.max_range();
   std::vector<double>& dist = m_constraint_dist;
   dist.resize(p.n_local());
-  for (auto& constraint : constraints) {
+  for (auto& constraint : m_constraints) {
     constraint->total_force.setZero();
     // all distances in one call (a tight loop for walls; bounded shapes skip
     // the exact distance of particles farther than the range from their
@@ -208,9 +208,9 @@ void System::add_constraint_forces(Energies* e) {
 
 void System::add_langevin_forces() {
   auto& p = particles;
-  const double gamma = langevin.gamma;
-  const double noise = std::sqrt(2.0 * gamma * langevin.kT / m_time_step);
-  const random::Key key{langevin.seed, static_cast<std::uint64_t>(random::Stream::langevin),
+  const double gamma = m_langevin.gamma;
+  const double noise = std::sqrt(2.0 * gamma * m_langevin.kT / m_time_step);
+  const random::Key key{m_langevin.seed, static_cast<std::uint64_t>(random::Stream::langevin),
                         step_count, 0};
   for (std::size_t i = 0; i < p.n_local(); ++i) {
     Vec3 f = -gamma * p.vel[i];
@@ -233,10 +233,10 @@ template <bool with_energy> void System::force_loop(Energies* e, bool forces_pre
   add_nonbonded_forces(e);
   add_constraint_forces(e);
   if constexpr (!with_energy) {
-    if (langevin.active && langevin.gamma > 0.0)
+    if (m_langevin.active && m_langevin.gamma > 0.0)
       add_langevin_forces();
-    if (lb && lb_coupling.active)
-      lb::couple_particles(*lb, p, box, lb_coupling.params, step_count, m_time_step);
+    if (lb && m_lb_coupling.active)
+      lb::couple_particles(*lb, p, box, m_lb_coupling.params, step_count, m_time_step);
   }
 }
 

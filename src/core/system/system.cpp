@@ -2,6 +2,7 @@
 
 #include "utils/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -61,7 +62,7 @@ int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass,
 void System::remove_particle(int pid) {
   checked_index(pid);
   particles.remove(pid);
-  cells.remove_exclusions_of(pid);  // a new particle may reuse the id
+  cells.remove_exclusions_of(pid); // a new particle may reuse the id
   for (auto& entry : bonded) {
     auto& g = entry.bonds;
     BondGroup kept;
@@ -84,7 +85,7 @@ void System::remove_particle(int pid) {
 
 void System::clear_particles() {
   particles.clear();
-  cells.clear_exclusions();  // new particles may reuse the ids
+  cells.clear_exclusions(); // new particles may reuse the ids
   for (auto& entry : bonded) {
     entry.bonds.ids.clear();
     entry.bonds.per_bond.clear();
@@ -147,8 +148,23 @@ void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
     fluid->validate(box, m_time_step);
   lb = std::move(fluid);
   if (!lb)
-    lb_coupling.active = false;
+    m_lb_coupling.active = false;
   m_lb_substep = 0;
+  m_forces_valid = false;
+}
+
+void System::set_lb_coupling(const LBCouplingState& state) {
+  if (state.active && !lb)
+    throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
+  if (!(state.params.gamma >= 0.0) || !std::isfinite(state.params.gamma))
+    throw InputError("gamma must be a finite number >= 0");
+  m_lb_coupling = state;
+  m_forces_valid = false;
+}
+
+void System::remove_constraint(const std::shared_ptr<ShapeBasedConstraint>& c) {
+  m_constraints.erase(std::remove(m_constraints.begin(), m_constraints.end(), c),
+                      m_constraints.end());
   m_forces_valid = false;
 }
 
@@ -165,4 +181,4 @@ Vec3 System::particle_momentum() const {
   return p;
 }
 
-}  // namespace pyoif
+} // namespace pyoif

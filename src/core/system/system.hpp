@@ -72,9 +72,29 @@ public:
   int checked_index(int pid) const;
 
   // --- interactions -----------------------------------------------------------
+  // Everything that changes the forces goes through a method of System that
+  // marks them stale (the next run recomputes them before its first half
+  // kick); the members it changes are private, except the non-bonded table
+  // and the cell system, whose other uses are many: change their parameters
+  // and exclusions through set_nonbonded and add_/remove_exclusion.
   NonbondedTable nonbonded;
+  /** Sets the parameters of a pair model for the type pair (t1, t2). */
+  template <class Model> void set_nonbonded(int t1, int t2, const typename Model::Params& p) {
+    nonbonded.at(t1, t2).template get<Model>() = p;
+    nonbonded.commit(t1, t2);
+    on_interactions_changed();
+  }
+  /** After a direct change of `nonbonded` (its ranges: the cell grid too). */
   void on_interactions_changed() {
     cells.invalidate();
+    m_forces_valid = false;
+  }
+  void add_exclusion(int id1, int id2) {
+    cells.add_exclusion(id1, id2);
+    m_forces_valid = false;
+  }
+  void remove_exclusion(int id1, int id2) {
+    cells.remove_exclusion(id1, id2);
     m_forces_valid = false;
   }
   std::vector<BondedEntry> bonded; ///< index = bonded interaction id
@@ -85,11 +105,24 @@ public:
   /** The time-step loop evaluates the OIF bond groups with the compiled fast
    *  path (oif_fast_path.hpp); false: the generic bond loop (tests compare). */
   bool bonded_fast_path = true;
-  std::vector<std::shared_ptr<ShapeBasedConstraint>> constraints;
+  const std::vector<std::shared_ptr<ShapeBasedConstraint>>& constraints() const {
+    return m_constraints;
+  }
+  void add_constraint(std::shared_ptr<ShapeBasedConstraint> c) {
+    m_constraints.push_back(std::move(c));
+    m_forces_valid = false;
+  }
+  void remove_constraint(const std::shared_ptr<ShapeBasedConstraint>& c);
 
   // --- thermostats and fluid --------------------------------------------------
-  LangevinParams langevin;
-  LBCouplingState lb_coupling;
+  const LangevinParams& langevin() const { return m_langevin; }
+  void set_langevin(const LangevinParams& params) {
+    m_langevin = params;
+    m_forces_valid = false;
+  }
+  const LBCouplingState& lb_coupling() const { return m_lb_coupling; }
+  /** Throws InputError without a fluid (when switching it on) or for a bad gamma. */
+  void set_lb_coupling(const LBCouplingState& state);
   std::shared_ptr<lb::LBFluid> lb;
   void set_lb(std::shared_ptr<lb::LBFluid> fluid);
 
@@ -100,10 +133,10 @@ public:
   void compute_forces();
   Energies compute_energies();
   Vec3 particle_momentum() const;
-  /** The forces of the last step no longer hold (a particle's position,
-   *  velocity, external force or type was set, a constraint, thermostat or
-   *  exclusion changed): the next run recomputes them before its first half
-   *  kick. */
+  /** The forces of the last step no longer hold: the next run recomputes
+   *  them before its first half kick. The methods above call it for what
+   *  they change; a caller that writes `particles` (positions, velocities,
+   *  external forces, types) directly must call it. */
   void invalidate_forces() { m_forces_valid = false; }
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;
@@ -119,6 +152,9 @@ private:
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
   void add_langevin_forces();
+  std::vector<std::shared_ptr<ShapeBasedConstraint>> m_constraints;
+  LangevinParams m_langevin;
+  LBCouplingState m_lb_coupling;
   std::vector<oif::FastBondPlan> m_fast_plans; ///< per bonded interaction id
   std::vector<double> m_constraint_dist;       ///< per particle, one constraint at a time
   /** Per OifLocalForces id: that group fused with its cell type's

@@ -18,9 +18,7 @@ namespace {
 template <class Model> void bind_pair_model(py::class_<System, std::shared_ptr<System>>& sys) {
   const std::string name = Model::name;
   sys.def(("set_" + name).c_str(), [](System& s, int t1, int t2, const typename Model::Params& p) {
-    s.nonbonded.at(t1, t2).template get<Model>() = p;
-    s.nonbonded.commit(t1, t2);
-    s.on_interactions_changed();
+    s.set_nonbonded<Model>(t1, t2, p);
   });
   sys.def(("get_" + name).c_str(),
           [](System& s, int t1, int t2) { return s.nonbonded.at(t1, t2).template get<Model>(); });
@@ -170,16 +168,8 @@ void bind_interactions(py::module_& m) {
       .def_readonly("only_positive", &ShapeBasedConstraint::only_positive)
       .def_readonly("total_force", &ShapeBasedConstraint::total_force);
 
-  sys.def("add_constraint",
-          [](System& s, std::shared_ptr<ShapeBasedConstraint> c) {
-            s.constraints.push_back(std::move(c));
-            s.invalidate_forces();
-          })
-      .def("remove_constraint", [](System& s, const std::shared_ptr<ShapeBasedConstraint>& c) {
-        auto& v = s.constraints;
-        v.erase(std::remove(v.begin(), v.end(), c), v.end());
-        s.invalidate_forces();
-      });
+  sys.def("add_constraint", &System::add_constraint)
+      .def("remove_constraint", &System::remove_constraint);
 }
 
 } // namespace pyoif::python

@@ -191,16 +191,13 @@ void bind_lb(py::module_& m) {
            [](System& s, double gamma, std::uint64_t seed) {
              if (!s.lb)
                throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
-             if (!(gamma >= 0.0) || !std::isfinite(gamma))
-               throw InputError("gamma must be a finite number >= 0");
-             s.lb_coupling.active = true;
-             s.lb_coupling.params = {gamma, s.lb->params().kT, seed};
-             s.invalidate_forces();
+             s.set_lb_coupling({true, {gamma, s.lb->params().kT, seed}});
            })
       .def("set_lb_coupling_off",
            [](System& s) {
-             s.lb_coupling.active = false;
-             s.invalidate_forces();
+             LBCouplingState off = s.lb_coupling();
+             off.active = false;
+             s.set_lb_coupling(off);
            })
       .def("lb_interpolated_velocity", [](const System& s, const Vec3& pos) -> Vec3 {
         if (!s.lb)

@@ -240,29 +240,21 @@ void bind_system(py::module_& m) {
       .def("set_vectors", &set_vectors)
       .def("get_scalars", &get_scalars)
       .def("set_scalars", &set_scalars)
-      .def("add_exclusion",
-           [](System& s, int a, int b) {
-             s.cells.add_exclusion(a, b);
-             s.invalidate_forces();
-           })
-      .def("remove_exclusion",
-           [](System& s, int a, int b) {
-             s.cells.remove_exclusion(a, b);
-             s.invalidate_forces();
-           })
+      .def("add_exclusion", &System::add_exclusion)
+      .def("remove_exclusion", &System::remove_exclusion)
       .def("get_pairs", &get_pairs)
       // thermostats
       .def("set_langevin",
            [](System& s, double kT, double gamma, std::uint64_t seed) {
-             s.langevin = {true, kT, gamma, seed};
-             s.invalidate_forces();
+             s.set_langevin({true, kT, gamma, seed});
            })
       .def("langevin_off",
            [](System& s) {
-             s.langevin.active = false;
-             s.invalidate_forces();
+             LangevinParams off = s.langevin();
+             off.active = false;
+             s.set_langevin(off);
            })
-      .def_property_readonly("langevin", [](const System& s) { return s.langevin; })
+      .def_property_readonly("langevin", [](const System& s) { return s.langevin(); })
       // integration
       .def("integrate", &System::integrate, py::arg("steps"), py::arg("recalc_forces") = false,
            py::arg("reuse_forces") = false, py::call_guard<py::gil_scoped_release>())
