@@ -1,6 +1,7 @@
 // Velocity Verlet: NVE energy conservation with soft-sphere + harmonic-bond
 // forces (error bounded and scaling as time_step^2), momentum conservation to
 // round-off, bonds across the periodic boundary.
+#include "shapes/wall.hpp"
 #include "system/system.hpp"
 
 #include <gtest/gtest.h>
@@ -151,8 +152,11 @@ System two_particles_at_rest() {
   s.add_particle(1, {4.0, 4.0, 4.0}, Vec3::Zero(), 1.0, 0, 0, Vec3::Zero(), 0);
   return s;
 }
-/** Soft sphere a / r^2 on particle 0 (pushed to -x) at separation r. */
-double pair_force_x(double r) { return -2.0 / (r * r * r); }
+/** x-force on particle 0 of the soft sphere V = 1 / r^2 (a = 1, n = 2) with
+ *  particle 1 at +x, separation r: pushed to -x. */
+double pair_force_x(double r) {
+  return -2.0 / (r * r * r);
+}
 } // namespace
 
 TEST(ForcesBetweenRuns, NewPairParametersReachTheFirstHalfKick) {
@@ -179,9 +183,9 @@ TEST(ForcesBetweenRuns, NewExclusionReachesTheFirstHalfKick) {
   s.remove_exclusion(0, 1);
   const Vec3 x0 = s.particles.pos[0], x1 = s.particles.pos[1];
   s.integrate(1);
-  const double expected = v_before[0] + 0.005 * (pair_force_x(x1[0] - x0[0]) +
-                                                 pair_force_x(s.particles.pos[1][0] -
-                                                              s.particles.pos[0][0]));
+  const double expected =
+      v_before[0] + 0.005 * (pair_force_x(x1[0] - x0[0]) +
+                             pair_force_x(s.particles.pos[1][0] - s.particles.pos[0][0]));
   EXPECT_NEAR(s.particles.vel[0][0], expected, 1e-12);
 }
 
@@ -197,4 +201,25 @@ TEST(ForcesBetweenRuns, LangevinSwitchedOnReachesTheFirstHalfKick) {
   // (the velocity the second force evaluation sees)
   const double g = 2.0, h = 0.005, v0 = 1.0, v_half = v0 - h * g * v0;
   EXPECT_NEAR(s.particles.vel[0][0], v_half - h * g * v_half, 1e-14);
+}
+
+TEST(ForcesBetweenRuns, ConstraintAddedAndRemovedReachesTheFirstHalfKick) {
+  System s = two_particles_at_rest();
+  s.set_nonbonded<SoftSphere>(0, 1, {1.0, 2.0, 1.2, 0.0}); // particle type 0, wall type 1
+  s.integrate(1);                                          // no constraint yet: nothing moves
+  ASSERT_EQ(s.particles.vel[0][0], 0.0);
+  // wall at x = 2.5 facing +x: particle 0 (x = 3) within the cutoff, 1 (x = 4) not
+  auto wall = std::make_shared<ShapeBasedConstraint>();
+  wall->shape = std::make_shared<shapes::Wall>(Vec3(1, 0, 0), 2.5);
+  wall->particle_type = 1;
+  s.add_constraint(wall);
+  s.integrate(1);
+  auto wall_force = [](double d) { return 2.0 / (d * d * d); }; // -dV/dd, V = 1 / d^2
+  const double v1 = 0.005 * (wall_force(0.5) + wall_force(s.particles.pos[0][0] - 2.5));
+  EXPECT_NEAR(s.particles.vel[0][0], v1, 1e-12);
+  EXPECT_EQ(s.particles.vel[1][0], 0.0);
+  s.remove_constraint(wall);
+  s.integrate(1);
+  // no force in either half kick (the old wall force would add 0.005 F)
+  EXPECT_NEAR(s.particles.vel[0][0], v1, 1e-15);
 }

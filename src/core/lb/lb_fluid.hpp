@@ -104,6 +104,9 @@ public:
    *  non-positive or non-finite density or a speed >= the lattice sound speed;
    *  that update is abandoned half done, and every later call throws too. */
   void step();
+  /** Throws SimulationInstability (with the first failure's message) once an
+   *  update has failed: System::integrate calls it before anything moves. */
+  void check_usable() const;
   /** Momentum of the populations plus the impulse accumulated in the force
    *  field that the next update will apply (particle coupling), minus the
    *  coupling impulse still in flight to the particles (CouplingLedger), MD

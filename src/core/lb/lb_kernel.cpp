@@ -414,7 +414,7 @@ void LBFluid::report_instability(const BadNode& bad) {
   throw SimulationInstability(msg.str());
 }
 
-void LBFluid::step() {
+void LBFluid::check_usable() const {
   if (!m_failed_update.empty())
     // the failed update stopped half way: its populations mix two time levels
     throw SimulationInstability(
@@ -422,6 +422,10 @@ void LBFluid::step() {
         "updated (" +
         m_failed_update +
         "). Its fields can still be read and written out; to go on, create a new fluid");
+}
+
+void LBFluid::step() {
+  check_usable();
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;

@@ -267,8 +267,10 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // forces stale: recomputing them at every call made a run split into
   // calls differ from one run -- the last step's coupling force recomputed
   // against the fluid updated since)
-  if (lb)
+  if (lb) {
     lb->validate(box, m_time_step);
+    lb->check_usable(); // refused before any particle moves or time advances
+  }
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();

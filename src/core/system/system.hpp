@@ -72,11 +72,14 @@ public:
   int checked_index(int pid) const;
 
   // --- interactions -----------------------------------------------------------
-  // Everything that changes the forces goes through a method of System that
-  // marks them stale (the next run recomputes them before its first half
-  // kick); the members it changes are private, except the non-bonded table
-  // and the cell system, whose other uses are many: change their parameters
-  // and exclusions through set_nonbonded and add_/remove_exclusion.
+  // Changes of the force field go through methods of System that mark the
+  // forces stale (the next run recomputes them before its first half kick).
+  // The constraint list and the thermostat settings are private; the
+  // non-bonded table, the cell system, the bonded interactions, the
+  // particles, the box and the fluid pointer are public members with many
+  // other uses: change their parameters and exclusions through set_nonbonded
+  // and add_/remove_exclusion, the box and fluid through their setters, and
+  // call invalidate_forces() after writing particles or bonds directly.
   NonbondedTable nonbonded;
   /** Sets the parameters of a pair model for the type pair (t1, t2). */
   template <class Model> void set_nonbonded(int t1, int t2, const typename Model::Params& p) {

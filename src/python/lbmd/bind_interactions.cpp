@@ -134,7 +134,7 @@ void bind_interactions(py::module_& m) {
             if (g.per_bond_stride)
               g.per_bond.erase(g.per_bond.begin() + b * g.per_bond_stride,
                                g.per_bond.begin() + (b + 1) * g.per_bond_stride);
-            s.compute_forces();
+            s.invalidate_forces(); // the next run recomputes them (and the plans)
             return true;
           }
         return false;

@@ -143,10 +143,11 @@ void add_exclusions(System& s, const IdArray& pairs) {
     s.checked_index(r(k, 0));
     s.checked_index(r(k, 1));
   }
-  // CellSystem::add_exclusion invalidates the pair list; doing it M times only
-  // sets a flag, so the rebuild happens once at the next force calculation
+  // System::add_exclusion invalidates the pair list and the forces; doing it
+  // M times only sets flags, so the rebuild happens once at the next force
+  // calculation
   for (py::ssize_t k = 0; k < r.shape(0); ++k)
-    s.cells.add_exclusion(r(k, 0), r(k, 1));
+    s.add_exclusion(r(k, 0), r(k, 1));
 }
 
 } // namespace
