@@ -235,8 +235,8 @@ template <bool with_energy> void System::force_loop(Energies* e, bool forces_pre
   if constexpr (!with_energy) {
     if (m_langevin.active && m_langevin.gamma > 0.0)
       add_langevin_forces();
-    if (lb && m_lb_coupling.active)
-      lb::couple_particles(*lb, p, box, m_lb_coupling.params, step_count, m_time_step);
+    if (m_lb && m_lb_coupling.active)
+      lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
   }
 }
 
@@ -267,9 +267,9 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // forces stale: recomputing them at every call made a run split into
   // calls differ from one run -- the last step's coupling force recomputed
   // against the fluid updated since)
-  if (lb) {
-    lb->validate(box, m_time_step);
-    lb->check_usable(); // refused before any particle moves or time advances
+  if (m_lb) {
+    m_lb->validate(box, m_time_step);
+    m_lb->check_usable(); // refused before any particle moves or time advances
   }
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
@@ -364,10 +364,10 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     const bool last = step + 1 == n_steps;
     if (last)
       second_kick();
-    if (lb && ++m_lb_substep >= lb_interval) {
+    if (m_lb && ++m_lb_substep >= lb_interval) {
       m_lb_substep = 0;
       try {
-        lb->step();
+        m_lb->step();
       } catch (...) {
         if (!last)
           second_kick(); // leave the particles as a step that ended here

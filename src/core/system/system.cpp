@@ -18,11 +18,11 @@ System::System(const Vec3& box_l, const std::array<bool, 3>& periodic)
 void System::set_time_step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt))
     throw InputError("time_step must be a finite positive number, got " + std::to_string(dt));
-  if (lb) {
-    const double ratio = lb->tau() / dt;
+  if (m_lb) {
+    const double ratio = m_lb->tau() / dt;
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || std::round(ratio) < 1)
       throw InputError("time_step " + std::to_string(dt) +
-                       " does not divide the lattice-Boltzmann tau " + std::to_string(lb->tau()) +
+                       " does not divide the lattice-Boltzmann tau " + std::to_string(m_lb->tau()) +
                        " (tau must be an integer multiple of time_step)");
   }
   m_time_step = dt;
@@ -146,15 +146,15 @@ void System::add_bonds(int bond_id, const std::vector<int>& ids,
 void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
   if (fluid)
     fluid->validate(box, m_time_step);
-  lb = std::move(fluid);
-  if (!lb)
+  m_lb = std::move(fluid);
+  if (!m_lb)
     m_lb_coupling.active = false;
   m_lb_substep = 0;
   m_forces_valid = false;
 }
 
 void System::set_lb_coupling(const LBCouplingState& state) {
-  if (state.active && !lb)
+  if (state.active && !m_lb)
     throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
   if (!(state.params.gamma >= 0.0) || !std::isfinite(state.params.gamma))
     throw InputError("gamma must be a finite number >= 0");
@@ -169,9 +169,9 @@ void System::remove_constraint(const std::shared_ptr<ShapeBasedConstraint>& c) {
 }
 
 int System::lb_steps_per_update() const {
-  if (!lb)
+  if (!m_lb)
     return 0;
-  return static_cast<int>(std::lround(lb->tau() / m_time_step));
+  return static_cast<int>(std::lround(m_lb->tau() / m_time_step));
 }
 
 Vec3 System::particle_momentum() const {

@@ -74,12 +74,12 @@ public:
   // --- interactions -----------------------------------------------------------
   // Changes of the force field go through methods of System that mark the
   // forces stale (the next run recomputes them before its first half kick).
-  // The constraint list and the thermostat settings are private; the
-  // non-bonded table, the cell system, the bonded interactions, the
-  // particles, the box and the fluid pointer are public members with many
-  // other uses: change their parameters and exclusions through set_nonbonded
-  // and add_/remove_exclusion, the box and fluid through their setters, and
-  // call invalidate_forces() after writing particles or bonds directly.
+  // The constraint list, the thermostat settings and the fluid are private;
+  // the non-bonded table, the cell system, the bonded interactions, the
+  // particles and the box are public members with many other uses: change
+  // their parameters and exclusions through set_nonbonded and
+  // add_/remove_exclusion, the box through its setters, and call
+  // invalidate_forces() after writing particles or bonds directly.
   NonbondedTable nonbonded;
   /** Sets the parameters of a pair model for the type pair (t1, t2). */
   template <class Model> void set_nonbonded(int t1, int t2, const typename Model::Params& p) {
@@ -126,7 +126,9 @@ public:
   const LBCouplingState& lb_coupling() const { return m_lb_coupling; }
   /** Throws InputError without a fluid (when switching it on) or for a bad gamma. */
   void set_lb_coupling(const LBCouplingState& state);
-  std::shared_ptr<lb::LBFluid> lb;
+  /** The lattice-Boltzmann fluid, null without one. */
+  const std::shared_ptr<lb::LBFluid>& fluid() const { return m_lb; }
+  /** Sets or (null) removes the fluid; removing it switches the coupling off. */
   void set_lb(std::shared_ptr<lb::LBFluid> fluid);
 
   // --- integration ------------------------------------------------------------
@@ -158,6 +160,7 @@ private:
   std::vector<std::shared_ptr<ShapeBasedConstraint>> m_constraints;
   LangevinParams m_langevin;
   LBCouplingState m_lb_coupling;
+  std::shared_ptr<lb::LBFluid> m_lb;
   std::vector<oif::FastBondPlan> m_fast_plans; ///< per bonded interaction id
   std::vector<double> m_constraint_dist;       ///< per particle, one constraint at a time
   /** Per OifLocalForces id: that group fused with its cell type's

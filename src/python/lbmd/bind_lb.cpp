@@ -189,9 +189,9 @@ void bind_lb(py::module_& m) {
          py::arg("fluid").none(true))
       .def("set_lb_coupling",
            [](System& s, double gamma, std::uint64_t seed) {
-             if (!s.lb)
+             if (!s.fluid())
                throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
-             s.set_lb_coupling({true, {gamma, s.lb->params().kT, seed}});
+             s.set_lb_coupling({true, {gamma, s.fluid()->params().kT, seed}});
            })
       .def("set_lb_coupling_off",
            [](System& s) {
@@ -200,9 +200,9 @@ void bind_lb(py::module_& m) {
              s.set_lb_coupling(off);
            })
       .def("lb_interpolated_velocity", [](const System& s, const Vec3& pos) -> Vec3 {
-        if (!s.lb)
+        if (!s.fluid())
           throw InputError("no lattice-Boltzmann fluid is active");
-        return lb::interpolated_velocity(*s.lb, s.box, pos);
+        return lb::interpolated_velocity(*s.fluid(), s.box, pos);
       });
 }
 

@@ -272,8 +272,9 @@ void bind_system(py::module_& m) {
              return d;
            })
       .def("particle_momentum", &System::particle_momentum)
-      .def("fluid_momentum",
-           [](const System& s) -> Vec3 { return s.lb ? s.lb->total_momentum() : Vec3::Zero(); });
+      .def("fluid_momentum", [](const System& s) -> Vec3 {
+        return s.fluid() ? s.fluid()->total_momentum() : Vec3::Zero();
+      });
 }
 
 } // namespace pyoif::python
