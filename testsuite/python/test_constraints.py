@@ -3,7 +3,9 @@ feels the soft-sphere force of the pair (particle type, constraint type),
 F = n a (d - offset)^-(n+1) along the shape's outward normal (model eq. 8),
 none beyond the range cutoff + offset; the constraint's total_force is minus
 the force on the particles; a particle inside a non-penetrable shape stops
-the run with SimulationInstability, inside a penetrable one it does not.
+the run with SimulationInstability, inside a penetrable one it does not;
+a member added to or removed from a union constraint between two runs acts
+from the next run's first half kick.
 
 The distances and normals below are computed by hand (not by the code under
 test): faces, edges, rims and the pore's rounded mouth, both directions."""
@@ -190,6 +192,31 @@ class ShapeConstraintForces(unittest.TestCase):
             np.testing.assert_allclose(p.v, [0, 0, 0], atol=1e-6)
         finally:
             self.system.thermostat.turn_off()
+
+    def test_union_changed_between_runs(self):
+        # A member added to a union that is already a constraint acts from
+        # the next run's first half kick (as with recalc_forces=True), not
+        # only from its second; removing it likewise.
+        states = []
+        for recalc in (False, True):
+            with self.cleared():
+                union = shapes.Union()
+                self.add(union)
+                p = self.system.part.add(pos=[5, 5, 6.5], v=[0, 0, 0.1], type=0)
+                self.system.integrator.run(3)  # empty union: no force
+                np.testing.assert_allclose(p.v, [0, 0, 0.1], rtol=1e-15)
+                wall = shapes.Wall(normal=[0, 0, 1], dist=5.0)
+                union.add(wall)
+                self.system.integrator.run(1, recalc_forces=recalc)
+                v_wall = np.copy(p.v)
+                union.remove(wall)
+                self.system.integrator.run(1, recalc_forces=recalc)
+                states.append(np.concatenate([v_wall, p.v, p.pos]))
+        np.testing.assert_array_equal(states[0], states[1])
+        # first step near the wall: v gets dt/2 (F(x0) + F(x1)), F ~ 0.7 at d = 1.5
+        self.assertGreater(states[0][2] - 0.1, 0.009 * soft_sphere_force(1.6))
+        # after removing it: no force at all in the second run
+        np.testing.assert_array_equal(states[0][3:6], states[0][:3])
 
     def test_bad_constraint_arguments(self):
         wall = shapes.Wall(normal=[0, 0, 1], dist=1)

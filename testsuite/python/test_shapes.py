@@ -122,6 +122,13 @@ class DistancesThroughPython(unittest.TestCase):
         self.expect(outer, [0, 0, 3.5], 0.5, [0, 0, -1])
         with self.assertRaises(ValueError):
             u2.add(outer)
+        # a union changed after it became a member: the outer one sees the
+        # change (its bounds are not those of the time of the add)
+        # and does not skip it for a nearer wall found first
+        inner = shapes.Union(shapes=[shapes.Sphere(center=[0, 0, 0], radius=1)])
+        outer2 = shapes.Union(shapes=[shapes.Wall(normal=[-1, 0, 0], dist=-20), inner])
+        inner.add(shapes.Sphere(center=[10, 0, 0], radius=1))
+        self.expect(outer2, [12.5, 0, 0], 1.5, [1, 0, 0])
 
     def test_ported_through_lbmd_namespace(self):
         import lbmd.shapes as s2

@@ -226,6 +226,7 @@ void LBFluid::set_ext_force_density(const Vec3& f) {
   require(f.allFinite(), "ext_force_density must be finite");
   m_p.ext_force_density = f;
   m_ext_lattice = f * m_p.tau * m_p.tau / m_p.agrid;
+  ++m_state_version;
 }
 
 void LBFluid::validate(const BoxGeometry& box, double time_step) const {
@@ -282,6 +283,7 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
 }
 
 void LBFluid::rebuild_geometry() {
+  ++m_state_version;
   // ghost flags: periodic images of the domain's
   for (int x = 0; x < m_pad[0]; ++x)
     for (int y = 0; y < m_pad[1]; ++y)
@@ -406,6 +408,7 @@ Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
 }
 
 void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
+  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the populations of a boundary node");
   for (int q = 0; q < Q; ++q)
@@ -415,6 +418,7 @@ void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
+  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the density or velocity of a boundary node");
   require(std::isfinite(rho) && rho > 0.0, "density must be a finite number > 0");

@@ -91,6 +91,10 @@ public:
   const Relaxation& relaxation() const { return m_relax; }
   const Vec3i& grid() const { return m_n; }
   std::uint64_t n_updates() const { return m_updates; }
+  /** Changes whenever the populations, the boundaries or ext_force_density
+   *  change (every update, every setter): System recomputes the coupling
+   *  forces when a run starts from a fluid changed since the last one. */
+  std::uint64_t state_version() const { return m_state_version; }
   int n_threads() const { return m_threads; }
   void set_n_threads(int n);
   void set_ext_force_density(const Vec3& f);
@@ -325,6 +329,7 @@ private:
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
   std::array<std::array<double, d3q19::Q>, d3q19::Q> m_basis{};
   std::uint64_t m_updates = 0;
+  std::uint64_t m_state_version = 0;
   /// the message of the update that found a bad node (empty: none); that
   /// update was abandoned half done, so the fluid takes no more updates
   std::string m_failed_update;

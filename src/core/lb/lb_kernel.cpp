@@ -426,6 +426,7 @@ void LBFluid::check_usable() const {
 
 void LBFluid::step() {
   check_usable();
+  ++m_state_version;
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;

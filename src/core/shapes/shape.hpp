@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace pyoif::shapes {
@@ -42,6 +43,10 @@ public:
    *  distance is at least box_distance(pos, lo, hi), which lets the
    *  constraints and unions skip the exact distance of far points. */
   virtual bool bounding_box(Vec3& /*lo*/, Vec3& /*hi*/) const { return false; }
+  /** Grows whenever the shape changes after construction (only a Union
+   *  can: its add, remove, clear), so that a constraint's user (System)
+   *  notices that forces computed before no longer hold. */
+  virtual std::uint64_t version() const { return 0; }
   /** Signed distances of n points for the constraints' loop: dist[i] is the
    *  exact signed distance where it is below `range` (> 0) and otherwise any
    *  value >= range. The default skips the exact distance of points farther

@@ -243,7 +243,7 @@ template <bool with_energy> void System::force_loop(Energies* e, bool forces_pre
 void System::compute_forces() {
   prepare_step();
   force_loop<false>(nullptr);
-  m_forces_valid = true;
+  mark_forces_valid();
 }
 
 Energies System::compute_energies() {
@@ -270,7 +270,13 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (m_lb) {
     m_lb->validate(box, m_time_step);
     m_lb->check_usable(); // refused before any particle moves or time advances
+    // populations, boundaries or ext_force_density set since the last run:
+    // the coupling forces of its last step no longer hold
+    if (m_lb_coupling.active && m_lb->state_version() != m_fluid_version_of_forces)
+      m_forces_valid = false;
   }
+  if (constraint_shape_version() != m_shape_version_of_forces)
+    m_forces_valid = false; // a constraint's shape changed (Union.add ...)
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();
@@ -351,7 +357,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
           p.vel[i][d] += half_kick[i] * p.force[i][d];
   };
   if (n_steps == 0) {
-    m_forces_valid = true;
+    mark_forces_valid();
     return;
   }
   int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
@@ -377,7 +383,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     if (!last) // second half kick of this step, first one and drift of the next
       moved = advance(std::integral_constant<int, 2>{});
   }
-  m_forces_valid = true;
+  mark_forces_valid();
 }
 
 } // namespace pyoif

@@ -161,6 +161,21 @@ private:
   LangevinParams m_langevin;
   LBCouplingState m_lb_coupling;
   std::shared_ptr<lb::LBFluid> m_lb;
+  /// the fluid's state_version() and the constraints' shape versions when
+  /// the forces were last made valid
+  std::uint64_t m_fluid_version_of_forces = 0, m_shape_version_of_forces = 0;
+  std::uint64_t constraint_shape_version() const {
+    std::uint64_t v = 0;
+    for (const auto& c : m_constraints)
+      v += c->shape ? c->shape->version() : 0;
+    return v;
+  }
+  /** The forces hold for the current state, the fluid's and shapes' included. */
+  void mark_forces_valid() {
+    m_forces_valid = true;
+    m_fluid_version_of_forces = m_lb ? m_lb->state_version() : 0;
+    m_shape_version_of_forces = constraint_shape_version();
+  }
   std::vector<oif::FastBondPlan> m_fast_plans; ///< per bonded interaction id
   std::vector<double> m_constraint_dist;       ///< per particle, one constraint at a time
   /** Per OifLocalForces id: that group fused with its cell type's
