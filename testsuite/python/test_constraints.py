@@ -213,7 +213,7 @@ class ShapeConstraintForces(unittest.TestCase):
                 self.system.integrator.run(1, recalc_forces=recalc)
                 states.append(np.concatenate([v_wall, p.v, p.pos]))
         np.testing.assert_array_equal(states[0], states[1])
-        # first step near the wall: v gets dt/2 (F(x0) + F(x1)), F ~ 0.7 at d = 1.5
+        # first step near the wall: v gets dt/2 (F(x0) + F(x1)), F ~ 2.1 at d = 1.5
         self.assertGreater(states[0][2] - 0.1, 0.009 * soft_sphere_force(1.6))
         # after removing it: no force at all in the second run
         np.testing.assert_array_equal(states[0][3:6], states[0][:3])

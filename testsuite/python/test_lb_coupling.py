@@ -29,7 +29,8 @@
   calls also end between lattice updates; with and without thermal noise)
   give identical positions and velocities, bit for bit (a call must not
   recompute the forces of the last step against the fluid updated since).
-  But when the fluid is changed between two calls (node velocities set),
+  But when the fluid is changed between two calls (a node's velocity or
+  density, ext_force_density),
   the next call starts from coupling forces against the changed fluid:
   the same, bit for bit, as with recalc_forces=True, and different from
   the forces of the last step.
@@ -103,19 +104,28 @@ class Coupling(unittest.TestCase):
                                                        [-0.5, 0.0, 0.2]]).max(), 1e-3)
 
     def test_fluid_changed_between_runs(self):
-        states = []
-        for recalc in (False, True, None):  # None: the fluid left as it is
-            system, lbf = make(dens=1.0)
-            p = system.part.add(pos=[3.3, 3.6, 3.2], v=[0.1, 0.0, 0.0])
-            system.integrator.run(7)
-            if recalc is not None:
-                lbf[3, 3, 3].velocity = [0.0, 0.5, 0.0]
-            system.integrator.run(3, recalc_forces=bool(recalc))
-            states.append(np.concatenate([p.pos, p.v]))
-        np.testing.assert_array_equal(states[0], states[1])
-        # the set velocity reached the particle in the first half kick: a
-        # clear y velocity (gamma dt/2 u_y ~ 2 * 0.005 * 0.5 * weight)
-        self.assertGreater(abs(states[0][4] - states[2][4]), 1e-4)
+        def set_velocity(lbf):
+            lbf[3, 3, 3].velocity = [0.0, 0.5, 0.0]
+
+        def set_density(lbf):
+            lbf[3, 3, 3].density = 1.3
+
+        def set_ext_force(lbf):
+            lbf.ext_force_density = [0.0, 0.02, 0.0]
+
+        for change in (set_velocity, set_density, set_ext_force):
+            states = []
+            for recalc in (False, True, None):  # None: the fluid left as it is
+                system, lbf = make(dens=1.0)
+                p = system.part.add(pos=[3.3, 3.6, 3.2], v=[0.1, 0.0, 0.0])
+                system.integrator.run(7)
+                if recalc is not None:
+                    change(lbf)
+                system.integrator.run(3, recalc_forces=bool(recalc))
+                states.append(np.concatenate([p.pos, p.v]))
+            np.testing.assert_array_equal(states[0], states[1], err_msg=change.__name__)
+            # the change reached the particle
+            self.assertGreater(np.abs(states[0] - states[2]).max(), 1e-6, msg=change.__name__)
 
     def test_momentum_conservation_thermal(self):
         self.check_momentum(1e-3)

@@ -408,23 +408,23 @@ Mat3 LBFluid::node_pressure_tensor(const Vec3i& node) const {
 }
 
 void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
-  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the populations of a boundary node");
   for (int q = 0; q < Q; ++q)
     require(std::isfinite(f[q]), "population: values must be finite");
+  ++m_state_version; // after the checks: a refused call changes nothing
   for (int q = 0; q < Q; ++q)
     m_f[population_slot(q, n)] = f[q];
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
-  ++m_state_version;
   const std::size_t n = checked_node(node);
   require(m_flag[n] == 0, "cannot set the density or velocity of a boundary node");
   require(std::isfinite(rho) && rho > 0.0, "density must be a finite number > 0");
   require(u.allFinite(), "velocity must be finite");
   // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
   const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
+  ++m_state_version;
   for (int q = 0; q < Q; ++q)
     m_f[population_slot(q, n)] = equilibrium(q, rho, u_lattice);
 }

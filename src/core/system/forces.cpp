@@ -360,6 +360,9 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     mark_forces_valid();
     return;
   }
+  // until the run ends normally the forces are those of some step in
+  // between, or partial after an exception: a later run recomputes them
+  m_forces_valid = false;
   int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
   for (int step = 0; step < n_steps; ++step) {
     ++step_count;
