@@ -153,19 +153,19 @@ void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
   m_forces_valid = false;
 }
 
-void System::set_lb_coupling(const LBCouplingState& state) {
-  if (state.active && !m_lb)
+void System::set_lb_coupling(double gamma, std::uint64_t seed) {
+  if (!m_lb)
     throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
-  if (!(state.params.gamma >= 0.0) || !std::isfinite(state.params.gamma))
+  if (!(gamma >= 0.0) || !std::isfinite(gamma))
     throw InputError("gamma must be a finite number >= 0");
-  m_lb_coupling = state;
-  m_forces_valid = false;
+  m_lb_coupling = {true, {gamma, m_lb->params().kT, seed}};
+  invalidate_forces();
 }
 
 void System::remove_constraint(const std::shared_ptr<ShapeBasedConstraint>& c) {
   m_constraints.erase(std::remove(m_constraints.begin(), m_constraints.end(), c),
                       m_constraints.end());
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 int System::lb_steps_per_update() const {

@@ -90,15 +90,15 @@ public:
   /** After a direct change of `nonbonded` (its ranges: the cell grid too). */
   void on_interactions_changed() {
     cells.invalidate();
-    m_forces_valid = false;
+    invalidate_forces();
   }
   void add_exclusion(int id1, int id2) {
     cells.add_exclusion(id1, id2);
-    m_forces_valid = false;
+    invalidate_forces();
   }
   void remove_exclusion(int id1, int id2) {
     cells.remove_exclusion(id1, id2);
-    m_forces_valid = false;
+    invalidate_forces();
   }
   std::vector<BondedEntry> bonded; ///< index = bonded interaction id
   int add_bonded_interaction(const BondedInteraction& ia);
@@ -113,7 +113,7 @@ public:
   }
   void add_constraint(std::shared_ptr<ShapeBasedConstraint> c) {
     m_constraints.push_back(std::move(c));
-    m_forces_valid = false;
+    invalidate_forces();
   }
   void remove_constraint(const std::shared_ptr<ShapeBasedConstraint>& c);
 
@@ -121,11 +121,20 @@ public:
   const LangevinParams& langevin() const { return m_langevin; }
   void set_langevin(const LangevinParams& params) {
     m_langevin = params;
-    m_forces_valid = false;
+    invalidate_forces();
+  }
+  void langevin_off() {
+    m_langevin.active = false;
+    invalidate_forces();
   }
   const LBCouplingState& lb_coupling() const { return m_lb_coupling; }
-  /** Throws InputError without a fluid (when switching it on) or for a bad gamma. */
-  void set_lb_coupling(const LBCouplingState& state);
+  /** Couples the particles to the fluid (kT is the fluid's). Throws
+   *  InputError without a fluid or for a bad gamma. */
+  void set_lb_coupling(double gamma, std::uint64_t seed);
+  void lb_coupling_off() {
+    m_lb_coupling.active = false;
+    invalidate_forces();
+  }
   /** The lattice-Boltzmann fluid, null without one. */
   const std::shared_ptr<lb::LBFluid>& fluid() const { return m_lb; }
   /** Sets or (null) removes the fluid; removing it switches the coupling off. */

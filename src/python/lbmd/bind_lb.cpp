@@ -187,18 +187,8 @@ void bind_lb(py::module_& m) {
   sys.def(
          "set_lb", [](System& s, std::shared_ptr<LBFluid> fluid) { s.set_lb(std::move(fluid)); },
          py::arg("fluid").none(true))
-      .def("set_lb_coupling",
-           [](System& s, double gamma, std::uint64_t seed) {
-             if (!s.fluid())
-               throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
-             s.set_lb_coupling({true, {gamma, s.fluid()->params().kT, seed}});
-           })
-      .def("set_lb_coupling_off",
-           [](System& s) {
-             LBCouplingState off = s.lb_coupling();
-             off.active = false;
-             s.set_lb_coupling(off);
-           })
+      .def("set_lb_coupling", &System::set_lb_coupling)
+      .def("set_lb_coupling_off", &System::lb_coupling_off)
       .def("lb_interpolated_velocity", [](const System& s, const Vec3& pos) -> Vec3 {
         if (!s.fluid())
           throw InputError("no lattice-Boltzmann fluid is active");

@@ -248,12 +248,7 @@ void bind_system(py::module_& m) {
            [](System& s, double kT, double gamma, std::uint64_t seed) {
              s.set_langevin({true, kT, gamma, seed});
            })
-      .def("langevin_off",
-           [](System& s) {
-             LangevinParams off = s.langevin();
-             off.active = false;
-             s.set_langevin(off);
-           })
+      .def("langevin_off", &System::langevin_off)
       .def_property_readonly("langevin", [](const System& s) { return s.langevin(); })
       // integration
       .def("integrate", &System::integrate, py::arg("steps"), py::arg("recalc_forces") = false,
