@@ -9,7 +9,9 @@
   tau = 5 time steps (the fluid gets the impulse at its next update) and the
   particle crossing the periodic boundary at a corner, and forces recomputed
   without a time step every third step; also with kT > 0
-  (fluid and coupling noise both conserve it).
+  (fluid and coupling noise both conserve it). A boundary added while
+  coupling impulses wait for the next update (a run that ended between
+  two updates) keeps them: the momentum stays exact (1e-12).
 - Deposits reach the populations: with particles spread over a box of many
   force-field chunks (64 nodes each; an update applies only the chunks that
   received a deposit) and tau = time step, the momentum of the populations
@@ -41,6 +43,8 @@ import numpy as np
 
 import lbmd
 import lbmd.lb
+import lbmd.lbboundaries
+import lbmd.shapes
 
 
 def make(kT=0.0, dens=50.0):
@@ -126,6 +130,29 @@ class Coupling(unittest.TestCase):
             np.testing.assert_array_equal(states[0], states[1], err_msg=change.__name__)
             # the change reached the particle
             self.assertGreater(np.abs(states[0] - states[2]).max(), 1e-6, msg=change.__name__)
+
+    def test_boundaries_changed_between_updates(self):
+        # tau = 5 time steps: a run that stops between two lattice updates
+        # leaves the coupling impulses of its last steps waiting in the force
+        # field; a boundary added then must not drop them. The new solid node
+        # is in a corner the particle's disturbance cannot reach in the two
+        # updates of the test, so particle + fluid momentum stays exact.
+        system = lbmd.System(box_l=[12.0, 12.0, 12.0])
+        system.time_step = 0.01
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=3.0, tau=0.05)
+        system.actors.add(lbf)
+        system.thermostat.set_lb(LB_fluid=lbf, gamma=2.0)
+        m, v0 = 1.0, np.array([0.2, -0.1, 0.05])
+        system.part.add(pos=[6.2, 5.9, 6.1], v=v0, mass=m)
+        p0 = system.analysis.linear_momentum()
+        system.integrator.run(7)  # updates after step 5; steps 6, 7 wait for the next
+        system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
+            shape=lbmd.shapes.Sphere(center=[0.5, 0.5, 0.5], radius=0.6)))
+        self.assertEqual(lbf[0, 0, 0].boundary, 1)
+        system.integrator.run(3)  # the next update (step 10) applies them
+        np.testing.assert_allclose(system.analysis.linear_momentum(), p0, rtol=0,
+                                   atol=1e-12 * m * np.linalg.norm(v0))
+        self.assertGreater(np.linalg.norm(lbf.total_momentum()), 0.05 * m * np.linalg.norm(v0))
 
     def test_momentum_conservation_thermal(self):
         self.check_momentum(1e-3)

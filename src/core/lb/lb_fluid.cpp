@@ -278,6 +278,14 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
         if (m_flag[n] != 0)
           for (int q = 0; q < Q; ++q)
             m_f[q * m_stride + n] = 0.0;
+        // Coupling impulses waiting for the next update (a run that stopped
+        // between updates, tau > time_step) stay with the nodes that remain
+        // fluid; on a node turned solid they are dropped (the wall takes
+        // them, as it takes every deposit on a solid node). A node that was
+        // solid may hold such old deposits, which no update read: cleared.
+        if (!m_field.empty() && (old_flag[n] != 0 || m_flag[n] != 0))
+          for (int d = 0; d < 3; ++d)
+            m_field[3 * n + d] = 0.0;
       }
   rebuild_geometry();
 }
@@ -331,9 +339,6 @@ void LBFluid::rebuild_geometry() {
     m_bounce_back.push_back(
         {l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, l.wall_term});
   build_halo_pairs();
-  m_field.clear();
-  m_field_chunk.clear();
-  m_field_used = false;
 }
 
 Vec3 LBFluid::boundary_force(int b) const {

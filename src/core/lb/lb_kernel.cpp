@@ -190,7 +190,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   const Relaxation l = m_relax;
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
   // the coupling's force field is read once and cleared in the same pass
-  // (solid nodes keep theirs, which nothing reads; rebuild_geometry clears all)
+  // (solid nodes keep theirs, which nothing reads; set_boundaries clears them)
   double* __restrict g = with_field ? m_field.data() : nullptr;
   const std::uint8_t* chunk = with_field ? m_field_chunk.data() : nullptr;
   const std::size_t begin = r.start, end = r.start + r.length;

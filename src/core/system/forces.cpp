@@ -273,10 +273,10 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     // populations, boundaries or ext_force_density set since the last run:
     // the coupling forces of its last step no longer hold
     if (m_lb_coupling.active && m_lb->state_version() != m_fluid_version_of_forces)
-      m_forces_valid = false;
+      invalidate_forces();
   }
   if (constraint_shape_version() != m_shape_version_of_forces)
-    m_forces_valid = false; // a constraint's shape changed (Union.add ...)
+    invalidate_forces(); // a constraint's shape changed (Union.add ...)
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();

@@ -26,19 +26,19 @@ void System::set_time_step(double dt) {
                        " (tau must be an integer multiple of time_step)");
   }
   m_time_step = dt;
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 void System::set_box_l(const Vec3& l) {
   box.set_length(l);
   cells.invalidate();
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 void System::set_periodicity(const std::array<bool, 3>& p) {
   box.set_periodic(p);
   cells.invalidate();
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass, int type,
@@ -55,7 +55,7 @@ int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass,
     throw InputError("pos, v and ext_force must be finite (particle " + std::to_string(pid) + ")");
   particles.add(pid, pos, Vec3i::Zero(), vel, mass, type, mol_id, ext_force, fixed);
   cells.invalidate();
-  m_forces_valid = false;
+  invalidate_forces();
   return pid;
 }
 
@@ -80,7 +80,7 @@ void System::remove_particle(int pid) {
     g = std::move(kept);
   }
   cells.invalidate();
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 void System::clear_particles() {
@@ -91,7 +91,7 @@ void System::clear_particles() {
     entry.bonds.per_bond.clear();
   }
   cells.invalidate();
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 int System::checked_index(int pid) const {
@@ -111,7 +111,7 @@ int System::add_bonded_interaction(const BondedInteraction& ia) {
       },
       ia);
   bonded.push_back(std::move(entry));
-  m_forces_valid = false;
+  invalidate_forces();
   return static_cast<int>(bonded.size()) - 1;
 }
 
@@ -140,7 +140,7 @@ void System::add_bonds(int bond_id, const std::vector<int>& ids,
     }
   g.ids.insert(g.ids.end(), ids.begin(), ids.end());
   g.per_bond.insert(g.per_bond.end(), per_bond.begin(), per_bond.end());
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
@@ -150,7 +150,7 @@ void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
   if (!m_lb)
     m_lb_coupling.active = false;
   m_lb_substep = 0;
-  m_forces_valid = false;
+  invalidate_forces();
 }
 
 void System::set_lb_coupling(double gamma, std::uint64_t seed) {
