@@ -3,7 +3,9 @@ feels the soft-sphere force of the pair (particle type, constraint type),
 F = n a (d - offset)^-(n+1) along the shape's outward normal (model eq. 8),
 none beyond the range cutoff + offset; the constraint's total_force is minus
 the force on the particles; a particle inside a non-penetrable shape stops
-the run with SimulationInstability, inside a penetrable one it does not;
+the run with SimulationInstability, inside a penetrable one it does not
+and feels, as in ESPResSo, the interaction at the mirrored distance (pushed
+away from the surface, deeper in), or nothing with only_positive;
 a member added to or removed from a union constraint between two runs acts
 from the next run's first half kick.
 
@@ -89,9 +91,10 @@ class ShapeConstraintForces(unittest.TestCase):
         finally:
             self.clear()
 
-    def add(self, shape, penetrable=False):
+    def add(self, shape, penetrable=False, only_positive=False):
         return self.system.constraints.add(lbmd.constraints.ShapeBasedConstraint(
-            shape=shape, particle_type=WALL_TYPE, penetrable=penetrable))
+            shape=shape, particle_type=WALL_TYPE, penetrable=penetrable,
+            only_positive=only_positive))
 
     def test_force_is_analytic_soft_sphere(self):
         for label, shape, pos, dist, normal in cases():
@@ -158,6 +161,7 @@ class ShapeConstraintForces(unittest.TestCase):
             "cylinder rim": [5.5, 5, 5], "rhomboid edge": [4, 4, 4],
             "hollow rhomboid": [0.5, 5, 5], "pore channel": [5, 8, 5], "union": [5, 5, 0.2],
         }
+        mirrored = []
         for label, shape, _, _, _ in cases():
             if label not in inside_points:
                 continue
@@ -169,12 +173,27 @@ class ShapeConstraintForces(unittest.TestCase):
                     self.system.integrator.run(0, recalc_forces=True)
                 self.assertIn("penetrated", str(cm.exception))
                 self.clear()
-                # Penetrable: no error, and no force from inside.
+                # Penetrable: no error; from inside (distance d < 0), as in
+                # ESPResSo, the interaction at the mirrored distance -d along
+                # d * normal, i.e. away from the surface, deeper in...
+                d, n = shape.calc_dist(inside_points[label])
+                self.assertLess(d, 0.0)
                 c = self.add(shape, penetrable=True)
+                p = self.system.part.add(pos=inside_points[label], type=0)
+                self.system.integrator.run(0, recalc_forces=True)
+                expected = (soft_sphere_force(-d) * -np.asarray(n)
+                            if OFFSET < -d < CUTOFF + OFFSET else np.zeros(3))
+                np.testing.assert_allclose(p.f, expected, rtol=RTOL, atol=1e-14)
+                np.testing.assert_allclose(c.total_force(), -expected, rtol=RTOL, atol=1e-14)
+                mirrored.append(np.linalg.norm(expected) > 0)
+                self.clear()
+                # ...and none with only_positive.
+                c = self.add(shape, penetrable=True, only_positive=True)
                 p = self.system.part.add(pos=inside_points[label], type=0)
                 self.system.integrator.run(0, recalc_forces=True)
                 np.testing.assert_array_equal(p.f, [0, 0, 0])
                 np.testing.assert_array_equal(c.total_force(), [0, 0, 0])
+        self.assertGreaterEqual(sum(mirrored), 5)
 
     def test_particle_held_off_a_wall_by_the_constraint(self):
         # Dynamics: a particle pushed towards a sphere by a constant external

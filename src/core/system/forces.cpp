@@ -182,17 +182,14 @@ void System::add_constraint_forces(Energies* e) {
       if (dist[i] > 0.0) {
         if (dist[i] >= params->range)
           continue;
-        double exact;
-        Vec3 normal;
-        constraint->shape->calc_dist(p.pos[i], exact, normal);
-        c.d = exact * normal;
-        c.dist = exact;
-        c.mol_i = p.mol_id[i];
-        c.normal_i = p.normal[i];
-        const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
-        p.force[i] += f;
-        constraint->total_force -= f;
-      } else if (!constraint->penetrable) {
+      } else if (constraint->penetrable) {
+        // inside a penetrable shape: as in ESPResSo, the interaction at the
+        // mirrored distance -dist, along the same vector dist * normal (so a
+        // repulsion pushes the particle deeper in, away from the surface),
+        // unless only_positive
+        if (constraint->only_positive || !(dist[i] < 0.0) || -dist[i] >= params->range)
+          continue;
+      } else {
         std::ostringstream msg;
         msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
             << ") penetrated the non-penetrable " << constraint->shape->name()
@@ -200,6 +197,16 @@ void System::add_constraint_forces(Energies* e) {
             << "; strengthen the node-wall interaction or reduce the time step";
         throw SimulationInstability(msg.str());
       }
+      double exact;
+      Vec3 normal;
+      constraint->shape->calc_dist(p.pos[i], exact, normal);
+      c.d = exact * normal;
+      c.dist = std::abs(exact);
+      c.mol_i = p.mol_id[i];
+      c.normal_i = p.normal[i];
+      const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
+      p.force[i] += f;
+      constraint->total_force -= f;
     }
   }
   if (e)
