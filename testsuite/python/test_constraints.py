@@ -5,7 +5,9 @@ none beyond the range cutoff + offset; the constraint's total_force is minus
 the force on the particles; a particle inside a non-penetrable shape stops
 the run with SimulationInstability, inside a penetrable one it does not
 and feels, as in ESPResSo, the interaction at the mirrored distance (pushed
-away from the surface, deeper in), or nothing with only_positive;
+away from the surface, deeper in), or nothing with only_positive; closer to
+the surface than the offset (either side) neither force nor energy (the
+energy was (d - offset)^-n there: -2000 for d = offset / 2);
 a member added to or removed from a union constraint between two runs acts
 from the next run's first half kick.
 
@@ -156,19 +158,29 @@ class ShapeConstraintForces(unittest.TestCase):
         np.testing.assert_allclose(c.total_force(), -total, rtol=RTOL)
 
     def test_penetration(self):
+        # inside point, its (negative) distance and the outward normal there, by hand
         inside_points = {
-            "wall": [5, 5, 0.5], "sphere": [5, 5, 5.5], "hollow sphere": [5, 5, 9.5],
-            "cylinder rim": [5.5, 5, 5], "rhomboid edge": [4, 4, 4],
-            "hollow rhomboid": [0.5, 5, 5], "pore channel": [5, 8, 5], "union": [5, 5, 0.2],
+            "wall": ([5, 5, 0.5], -0.5, [0, 0, 1]),
+            "sphere": ([5, 5, 5.5], -1.5, [0, 0, 1]),
+            "hollow sphere": ([5, 5, 9.5], -1.5, [0, 0, -1]),
+            "cylinder rim": ([5.5, 5, 5], -1.5, [1, 0, 0]),
+            "rhomboid edge": ([4, 4.5, 5], -1.0, [-1, 0, 0]),
+            "hollow rhomboid": ([0.5, 5, 5], -0.5, [1, 0, 0]),
+            "pore channel": ([5, 8, 5], -1.0, [0, -1, 0]),
+            "union": ([5, 5, 0.2], -0.3, [0, 0, 1]),
         }
         mirrored = []
         for label, shape, _, _, _ in cases():
             if label not in inside_points:
                 continue
             with self.subTest(label), self.cleared():
-                self.assertTrue(shape.is_inside(inside_points[label]))
+                pos, d, n = inside_points[label]
+                self.assertTrue(shape.is_inside(pos))
+                got_d, got_n = shape.calc_dist(pos)
+                self.assertAlmostEqual(got_d, d, delta=1e-12)
+                np.testing.assert_allclose(got_n, n, atol=1e-12)
                 self.add(shape, penetrable=False)
-                self.system.part.add(pos=inside_points[label], type=0)
+                self.system.part.add(pos=pos, type=0)
                 with self.assertRaises(lbmd.SimulationInstability) as cm:
                     self.system.integrator.run(0, recalc_forces=True)
                 self.assertIn("penetrated", str(cm.exception))
@@ -176,10 +188,8 @@ class ShapeConstraintForces(unittest.TestCase):
                 # Penetrable: no error; from inside (distance d < 0), as in
                 # ESPResSo, the interaction at the mirrored distance -d along
                 # d * normal, i.e. away from the surface, deeper in...
-                d, n = shape.calc_dist(inside_points[label])
-                self.assertLess(d, 0.0)
                 c = self.add(shape, penetrable=True)
-                p = self.system.part.add(pos=inside_points[label], type=0)
+                p = self.system.part.add(pos=pos, type=0)
                 self.system.integrator.run(0, recalc_forces=True)
                 expected = (soft_sphere_force(-d) * -np.asarray(n)
                             if OFFSET < -d < CUTOFF + OFFSET else np.zeros(3))
@@ -189,11 +199,25 @@ class ShapeConstraintForces(unittest.TestCase):
                 self.clear()
                 # ...and none with only_positive.
                 c = self.add(shape, penetrable=True, only_positive=True)
-                p = self.system.part.add(pos=inside_points[label], type=0)
+                p = self.system.part.add(pos=pos, type=0)
                 self.system.integrator.run(0, recalc_forces=True)
                 np.testing.assert_array_equal(p.f, [0, 0, 0])
                 np.testing.assert_array_equal(c.total_force(), [0, 0, 0])
-        self.assertGreaterEqual(sum(mirrored), 5)
+        self.assertEqual(sum(mirrored), len(inside_points))
+
+    def test_within_the_offset_no_force_no_energy(self):
+        # Closer to the surface than the soft sphere's offset (outside, or
+        # inside a penetrable shape), where the potential is singular: no
+        # force and a zero, finite energy (not inf or NaN in the sum).
+        shape = shapes.Wall(normal=[0, 0, 1], dist=1)
+        self.add(shape, penetrable=True)
+        for z in (1 + 0.5 * OFFSET, 1 - 0.5 * OFFSET):
+            with self.subTest(z=z):
+                p = self.system.part.add(pos=[5, 5, z], type=0)
+                self.system.integrator.run(0, recalc_forces=True)
+                np.testing.assert_array_equal(p.f, [0, 0, 0])
+                self.assertEqual(self.system.analysis.energy()["non_bonded"], 0.0)
+                p.remove()
 
     def test_particle_held_off_a_wall_by_the_constraint(self):
         # Dynamics: a particle pushed towards a sphere by a constant external

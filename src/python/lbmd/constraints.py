@@ -13,7 +13,10 @@ class ShapeBasedConstraint(Constraint):
     """A wall or obstacle: particles of type t feel the non-bonded
     interactions of the pair (t, particle_type) at their distance from the
     shape's surface. A particle inside a non-penetrable shape stops the run
-    with SimulationInstability."""
+    with SimulationInstability. Inside a penetrable one (as in ESPResSo) it
+    feels the interaction at the mirrored distance -d along d * normal: a
+    repulsion pushes it away from the surface, deeper in; with
+    only_positive=True it feels nothing inside."""
 
     _params = [Param("shape", "object", cls=Shape),
                Param("particle_type", "int", 0, check=non_negative),

@@ -18,8 +18,10 @@ struct SoftSphere {
     double range() const { return cutoff + offset; }
   };
 
+  /** Zero where the force is (at or inside the offset, where the potential
+   *  is singular: no inf or NaN in an energy sum). */
   static double energy(const Params& p, const PairContext& c) {
-    if (c.dist >= p.range())
+    if (c.dist >= p.range() || c.dist <= p.offset)
       return 0.0;
     return p.a * std::pow(c.dist - p.offset, -p.n);
   }
@@ -33,4 +35,4 @@ struct SoftSphere {
   }
 };
 
-}  // namespace pyoif
+} // namespace pyoif
