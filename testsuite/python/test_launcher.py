@@ -2,7 +2,6 @@
 and the installed launcher from `cmake --install`."""
 import os
 import subprocess
-import sys
 import tempfile
 import unittest
 

@@ -121,6 +121,57 @@ class BadInput(unittest.TestCase):
             lbf.write_vtk_velocity(3)
         with self.assertRaisesRegex(ValueError, "cannot open"):
             lbf.write_vtk_velocity("/nonexistent/dir/v.vtk")
+        # a misspelt property was stored on the temporary node object (before)
+        with self.assertRaisesRegex(AttributeError, "no property 'vel'"):
+            lbf[0, 0, 0].vel = [0.01, 0, 0]
+        with self.assertRaisesRegex(AttributeError, "no property 'densiy'"):
+            lbf[:, :, :].densiy = 2.0
+        with self.assertRaisesRegex(ValueError, "add up to a density > 0"):
+            lbf[0, 0, 0].population = [-1.0] * 19
+        np.testing.assert_allclose(lbf[0, 0, 0].density, 1.0)
+
+    def test_numbers_beyond_the_engine_types(self):
+        for name, value in (("seed", 2**70), ("n_threads", 2**40), ("n_threads", 10**4)):
+            with self.assertRaisesRegex(ValueError, f"'{name}'"):
+                lbmd.lb.LBFluid(**GOOD, **{name: value})
+        s = system()
+        with self.assertRaisesRegex(ValueError, "'seed'"):
+            s.thermostat.set_langevin(kT=1.0, gamma=1.0, seed=2**64)
+        with self.assertRaisesRegex(ValueError, "'steps'"):
+            s.integrator.run(2**31)
+
+    def test_whole_box_boundary_refused(self):
+        """A boundary that leaves no fluid node: refused, the fluid as before
+        (before: accepted, the fluid had zero mass but read density 1)."""
+        s = system()
+        lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
+        wall = lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=0.6))
+        s.lbboundaries.add(wall)
+        mass = lbf.total_mass()
+        with self.assertRaisesRegex(ValueError, "no fluid is left"):
+            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
+                shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=100.0)))
+        self.assertEqual(len(s.lbboundaries), 1)
+        self.assertEqual(lbf.total_mass(), mass)
+        self.assertEqual(lbf[0, 0, 0].boundary, 1)
+        self.assertEqual(lbf[0, 0, 1].boundary, 0)
+
+    def test_lattice_too_large(self):
+        s = lbmd.System(box_l=[4.194302] * 3)
+        s.time_step = 1e-6
+        with self.assertRaisesRegex(ValueError, "2\\^50 bytes"):
+            s.actors.add(lbmd.lb.LBFluid(agrid=1e-6, dens=1.0, visc=1e-6, tau=1e-6))
+
+    def test_vtk_write_error_at_close(self):
+        """A small file's write error shows only at fclose (before: success)."""
+        import os
+        import stat
+        if not os.path.exists("/dev/full") or not stat.S_ISCHR(os.stat("/dev/full").st_mode):
+            self.skipTest("no /dev/full")
+        s = system()
+        lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
+        with self.assertRaisesRegex(ValueError, "error while writing"):
+            lbf.write_vtk_velocity("/dev/full")
 
 
 class Access(unittest.TestCase):
@@ -295,6 +346,17 @@ class Instability(unittest.TestCase):
         np.testing.assert_array_equal(p.v, v)
         # away from the bad node the fluid did not move yet (one half update)
         np.testing.assert_allclose(lbf[3, 0, 5].velocity, [0, 0, 0], atol=1e-12)
+
+    def test_stiff_coupling_named(self):
+        """gamma dt / m = 5: the coupled particle and node overshoot and the
+        fluid blows up; the message names the coupling, not only the fluid."""
+        s = system(dt=0.1)
+        lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
+        s.part.add(pos=[2.0, 2.5, 3.0], v=[1.0, 0, 0])
+        s.thermostat.set_lb(LB_fluid=lbf, gamma=50.0)
+        with self.assertRaisesRegex(lbmd.SimulationInstability,
+                                    r"gamma \* time_step / mass = 5\b.*lower gamma"):
+            s.integrator.run(200)
 
     def test_supersonic_node_odd_update(self):
         s = system()

@@ -185,6 +185,80 @@ class ParticleBadInput(unittest.TestCase):
         self.assertIn("broke", str(cm.exception))
         self.assertIn("0 1", str(cm.exception))
 
+    def test_integers_out_of_range_are_refused_not_wrapped(self):
+        """ids, types and mol_ids are C++ ints: 2**40 must not become 0 and
+        1.7 must not become 1 (before: silently wrapped or truncated)."""
+        s = self.system
+        add = s.part.add
+        self.assertRaisesNaming(ValueError, "'type'", add, pos=[1, 1, 1], type=2**40)
+        self.assertRaisesNaming(ValueError, "'mol_id'", add, pos=[1, 1, 1], mol_id=2**33)
+        self.assertRaisesNaming(ValueError, "'id'", add, pos=[1, 1, 1], id=2**31 - 1)
+        self.assertEqual(len(s.part), 0)  # nothing half added
+        p = add(pos=[1, 1, 1], type=2)
+        self.assertRaisesNaming(TypeError, "'type'", setattr, p, "type", 1.7)
+        self.assertRaisesNaming(TypeError, "'type'", setattr, p, "type", float("nan"))
+        self.assertRaisesNaming(ValueError, "'type'", setattr, p, "type", 2**40)
+        self.assertRaisesNaming(TypeError, "'mol_id'", setattr, p, "mol_id", 2.5)
+        self.assertEqual((p.type, p.mol_id), (2, 0))
+        p.mol_id = np.float64(3.0)  # a whole number stored as a float is fine
+        self.assertEqual(p.mol_id, 3)
+        self.assertRaisesNaming(TypeError, "pid", s.part.by_id, 0.7)
+        self.assertRaisesNaming(ValueError, "pid", s.part.by_id, 2**40)
+        q = add(pos=[2, 2, 2])
+        h = HarmonicBond(k=1.0, r_0=1.0)
+        s.bonded_inter.add(h)
+        self.assertRaisesNaming(ValueError, "partner", p.add_bond, (h, 2**32 + 1))
+        self.assertRaisesNaming(TypeError, "partners", p.add_bond, (h, 0.9))
+        self.assertEqual(p.bonds, ())
+        self.assertRaisesNaming(TypeError, "tuple", p.delete_bond, ())
+        self.assertRaisesNaming(ValueError, "partner", p.delete_bond, (h, -3))
+        self.assertRaisesNaming(TypeError, "pid", s.part.exists, "a")
+        # a slice refused as a whole: no particle changed
+        sl = s.part.by_ids([p.id, q.id])
+        self.assertRaisesNaming(ValueError, "mass", setattr, sl, "mass", [2.0, -1.0])
+        np.testing.assert_array_equal(sl.mass, [1.0, 1.0])
+
+    def test_exclusion_partner_must_exist(self):
+        """A negative or missing partner crashed the next run (before)."""
+        s = self.system
+        s.time_step = 0.01
+        p = s.part.add(pos=[1, 1, 1])
+        s.part.add(pos=[2, 1, 1])
+        self.assertRaisesNaming(ValueError, "partner", p.add_exclusion, -1)
+        self.assertRaisesNaming(ValueError, "does not exist", p.add_exclusion, 17)
+        self.assertRaisesNaming(TypeError, "partner", p.add_exclusion, 1.7)
+        self.assertRaisesNaming(ValueError, "itself", p.add_exclusion, p.id)
+        with self.assertRaises(ValueError):  # the engine checks too
+            s._core.add_exclusion(0, 2000000000)
+        p.add_exclusion(1)
+        s.integrator.run(5)
+
+    def test_position_too_far_to_fold(self):
+        """Beyond 1e9 box lengths the image counter would overflow: refused
+        (before: read back as garbage after run(0))."""
+        s = self.system
+        self.assertRaisesNaming(ValueError, "1e9 box lengths", s.part.add, pos=[1e12, 1, 1])
+        p = s.part.add(pos=[1, 1, 1])
+        self.assertRaisesNaming(ValueError, "1e9 box lengths", setattr, p, "pos", [1, -1e11, 1])
+        np.testing.assert_array_equal(p.pos, [1, 1, 1])
+
+    def test_blow_up_stops_with_the_particle_named(self):
+        """k dt^2 / m = 250: the bond makes the pair explode. Stopped when a
+        particle moves half the box in one step (before: ran on to energies
+        of 1e12 without a word)."""
+        s = self.system
+        s.time_step = 0.5
+        s.part.add(pos=[[4, 5, 5], [6, 5, 5]])
+        h = HarmonicBond(k=1000.0, r_0=1.0)
+        s.bonded_inter.add(h)
+        s.part.by_id(0).add_bond((h, 1))
+        with self.assertRaises(lbmd.SimulationInstability) as cm:
+            s.integrator.run(100)
+        msg = str(cm.exception)
+        self.assertIn("in one time step", msg)
+        self.assertIn("particle 0", msg)
+        self.assertTrue(np.all(np.isfinite(s.part.all().pos)))
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -38,6 +38,82 @@ class SystemApi(unittest.TestCase):
         np.testing.assert_allclose(a.part.by_id(0).pos, [1.1, 1, 1])
         np.testing.assert_array_equal(b.part.by_id(0).pos, [1, 1, 1])
 
+    def test_ctrl_c_ends_a_run_between_steps(self):
+        """SIGINT (here a SIGALRM handler raising KeyboardInterrupt, which the
+        run sees the same way) ends a long run within 16 steps, the particles
+        as a shorter run leaves them: the same trajectory as an uninterrupted
+        run of that many steps. Before, the signal waited for the run's end."""
+        import signal
+
+        def make():
+            s = lbmd.System(box_l=[8, 8, 8])
+            s.time_step = 0.01
+            s.part.add(pos=[[1, 1, 1], [1.9, 1.2, 1]], v=[[0.3, 0.1, 0], [-0.2, 0, 0.1]])
+            s.non_bonded_inter[0, 0].soft_sphere.set_params(a=1.0, n=2.0, cutoff=1.5)
+            return s
+
+        def interrupt(signum, frame):
+            raise KeyboardInterrupt
+
+        s = make()
+        old = signal.signal(signal.SIGALRM, interrupt)
+        try:
+            signal.setitimer(signal.ITIMER_REAL, 0.2)
+            with self.assertRaises(KeyboardInterrupt):
+                s.integrator.run(2**31 - 1)  # about a year at this speed
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, old)
+        steps = round(s.time / s.time_step)
+        self.assertGreater(steps, 0)
+        self.assertEqual(steps % 16, 0)
+        ref = make()
+        ref.integrator.run(steps)
+        np.testing.assert_allclose(s.part.all().pos, ref.part.all().pos, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(s.part.all().v, ref.part.all().v, rtol=0, atol=1e-12)
+        s.integrator.run(16)  # and it goes on
+        ref.integrator.run(16)
+        np.testing.assert_allclose(s.part.all().pos, ref.part.all().pos, rtol=0, atol=1e-12)
+
+    def test_parameter_objects_refuse_changes_they_would_ignore(self):
+        """sphere.radius = 5 changed the Python object only (before)."""
+        sphere = lbmd.shapes.Sphere(center=[1, 1, 1], radius=1.0)
+        with self.assertRaisesRegex(AttributeError, "create a new Sphere"):
+            sphere.radius = 5.0
+        self.assertEqual(sphere.get_params()["radius"], 1.0)
+        bond = lbmd.interactions.HarmonicBond(k=1.0, r_0=1.0)
+        with self.assertRaisesRegex(AttributeError, "'k' cannot be changed"):
+            bond.k = 100.0
+        with self.assertRaisesRegex(TypeError, "keywords"):
+            lbmd.interactions.HarmonicBond(1.0, 1.0)
+        s = lbmd.System(box_l=[4, 4, 4])
+        with self.assertRaisesRegex(TypeError, "keywords"):
+            s.non_bonded_inter[0, 0].soft_sphere.set_params(1.0, 2.0, 1.0)
+        with self.assertRaisesRegex(TypeError, "box_l"):
+            lbmd.System(box_l=["8", "8", "8"])
+        with self.assertRaisesRegex(TypeError, "min_global_cut"):
+            s.min_global_cut = "abc"
+        s.time_step = np.array(0.01)  # a 0-d array is a number
+        self.assertEqual(s.time_step, 0.01)
+
+    def test_constraint_added_twice_and_empty_type(self):
+        s = lbmd.System(box_l=[4, 4, 4])
+        c = s.constraints.add(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=0.0), particle_type=1)
+        with self.assertRaisesRegex(ValueError, "already added"):
+            s.constraints.add(c)
+        with self.assertRaisesRegex(ValueError, "no particle of type 3"):
+            s.analysis.center_of_mass(p_type=3)
+
+    def test_non_bonded_types_bounded(self):
+        """Type pairs are a dense table: a type of 9000 asked for 7 GB, even
+        to read (before)."""
+        s = lbmd.System(box_l=[4, 4, 4])
+        with self.assertRaisesRegex(ValueError, "0..1023"):
+            s.non_bonded_inter[9000, 0].soft_sphere.is_active()
+        self.assertFalse(s.non_bonded_inter[1023, 1023].soft_sphere.is_active())
+        with self.assertRaisesRegex(ValueError, "0..1023"):
+            s._core.get_soft_sphere(0, 5000)  # the engine checks too
+
     def test_time_advances(self):
         s = lbmd.System(box_l=[10, 10, 10])
         s.time_step = 0.5

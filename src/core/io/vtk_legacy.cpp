@@ -35,8 +35,13 @@ void write_vtk_structured_points(const std::string& path, const Vec3i& dims, con
     else
       std::fprintf(f, "%.17g\n", data[i]);
   }
-  if (std::ferror(f))
-    throw InputError("VTK output: error while writing '" + path + "'");
+  // the buffered tail reaches the file only at fclose: its result counts
+  // too (a full disk), else a truncated file would pass as written
+  const bool write_error = std::ferror(f) != 0;
+  const bool close_error = std::fclose(file.release()) != 0;
+  if (write_error || close_error)
+    throw InputError("VTK output: error while writing '" + path +
+                     "' (disk full or not writable?); the file is incomplete");
 }
 
 } // namespace pyoif::io

@@ -22,10 +22,7 @@ using namespace d3q19;
 namespace {
 
 std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(10);
-  s << x;
-  return s.str();
+  return format_number(x);
 }
 
 void require(bool ok, const std::string& msg) {
@@ -78,8 +75,20 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
             "agrid " + fmt(p.agrid) + " does not divide the box length " + fmt(m_box[d]) +
                 " on axis " + std::to_string(d) + " (box_l / agrid = " + fmt(cells) +
                 " must be a positive integer)");
+    // a padded axis must fit an int (the indices and offsets are ints)
+    require(rounded <= 1e8, "agrid " + fmt(p.agrid) + " gives " + fmt(rounded) +
+                                " lattice nodes on axis " + std::to_string(d) +
+                                "; a lattice that fine cannot be stored");
     m_n[d] = static_cast<int>(rounded);
     m_pad[d] = m_n[d] + 2;
+  }
+  {
+    // 19 populations + flags per padded node: refused (instead of an
+    // allocation whose size wrapped around) when it exceeds 2^50 bytes
+    const double padded = double(m_pad[0]) * m_pad[1] * m_pad[2];
+    require(padded * (Q * sizeof(double) + 2) < std::ldexp(1.0, 50),
+            "the lattice of " + fmt(double(m_n[0]) * m_n[1] * m_n[2]) +
+                " nodes (box / agrid) needs more than 2^50 bytes; use a larger agrid");
   }
 
   // Relaxation (Duenweg, Schiller & Ladd 2007, eqs. 40-41, in lattice units):
@@ -255,6 +264,7 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
   }
   normalize_layout();
   const std::vector<std::uint16_t> old_flag = m_flag;
+  std::vector<BoundarySpec> old_boundaries = std::move(m_boundaries);
   m_boundaries = boundaries;
   std::fill(m_flag.begin(), m_flag.end(), 0);
   for (int x = 1; x <= m_n[0]; ++x)
@@ -267,6 +277,17 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
             break;
           }
       }
+  // no fluid left: refused (the flags back as they were, nothing else changed)
+  bool any_fluid = false;
+  for (int x = 1; x <= m_n[0] && !any_fluid; ++x)
+    for (int y = 1; y <= m_n[1] && !any_fluid; ++y)
+      for (int z = 1; z <= m_n[2] && !any_fluid; ++z)
+        any_fluid = m_flag[index(x, y, z)] == 0;
+  if (!any_fluid && !boundaries.empty()) {
+    m_flag = old_flag;
+    m_boundaries = std::move(old_boundaries);
+    throw InputError("LBBoundary: the boundaries cover every lattice node, no fluid is left");
+  }
   // nodes that became fluid start at rest at the reference density
   for (int x = 1; x <= m_n[0]; ++x)
     for (int y = 1; y <= m_n[1]; ++y)

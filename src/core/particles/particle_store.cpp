@@ -5,6 +5,9 @@ namespace pyoif {
 std::size_t ParticleStore::add(int pid, const Vec3& p, const Vec3i& img, const Vec3& v, double m,
                                int t, int mol, const Vec3& fext, std::uint8_t fix) {
   const std::size_t idx = id.size();
+  // the id map first: if it cannot grow (std::bad_alloc) nothing has changed
+  if (static_cast<std::size_t>(pid) >= index_of_id.size())
+    index_of_id.resize(static_cast<std::size_t>(pid) + 1, -1);
   layout_version = next_layout_version();
   id.push_back(pid);
   pos.push_back(p);
@@ -17,8 +20,6 @@ std::size_t ParticleStore::add(int pid, const Vec3& p, const Vec3i& img, const V
   type.push_back(t);
   mol_id.push_back(mol);
   fixed.push_back(fix);
-  if (static_cast<std::size_t>(pid) >= index_of_id.size())
-    index_of_id.resize(pid + 1, -1);
   index_of_id[pid] = static_cast<int>(idx);
   return idx;
 }
@@ -51,6 +52,8 @@ void ParticleStore::remove(int pid) {
   clear_ghosts();
 }
 
-void ParticleStore::clear() { *this = ParticleStore{}; } // a fresh layout_version
+void ParticleStore::clear() {
+  *this = ParticleStore{};
+} // a fresh layout_version
 
-}  // namespace pyoif
+} // namespace pyoif

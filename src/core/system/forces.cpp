@@ -3,6 +3,7 @@
 #include "system/system.hpp"
 #include "utils/random.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <type_traits>
@@ -267,6 +268,22 @@ Energies System::compute_energies() {
   return e;
 }
 
+void System::report_fast_particle(double dt) const {
+  const auto& p = particles;
+  std::size_t fastest = 0;
+  for (std::size_t i = 1; i < p.n_local(); ++i)
+    if (p.vel[i].squaredNorm() > p.vel[fastest].squaredNorm())
+      fastest = i;
+  std::ostringstream msg;
+  msg << "the integration is unstable: particle " << p.id[fastest] << " moved "
+      << dt * p.vel[fastest].norm() << " in one time step (more than half the box length "
+      << box.length().minCoeff() << ") to time " << time + dt << "; its velocity ("
+      << p.vel[fastest].transpose() << "), force (" << p.force[fastest].transpose()
+      << "). Reduce the time step or the stiffness of the interactions (bonds, membrane "
+         "moduli, contacts, coupling gamma)";
+  throw SimulationInstability(msg.str());
+}
+
 void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (n_steps < 0)
     throw InputError("steps must be a non-negative integer, got " + std::to_string(n_steps));
@@ -308,6 +325,10 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     one_mass &= half_kick[i] == half_kick[0];
     any_external |= !(p.ext_force[i].array() == 0.0).all();
   }
+  // A particle that moves half the box in one step has certainly blown up
+  // (a stiff bond or membrane with too long a time step): stopped here,
+  // long before its energy overflows, with its id and speed.
+  const double step_limit2 = 0.25 * std::pow(box.length().minCoeff(), 2);
   // kicks half kicks (1 or 2), then the drift; returns the displacement test
   // (1: some particle moved beyond the skin or a re-sort is due anyway, 0:
   // none) or -1 when a position is not finite (prepare_step then names it)
@@ -316,7 +337,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     const Vec3* const x0 = cells.displacement_reference(n);
     const double limit2 = cells.displacement_limit2();
     const double h0 = n > 0 ? half_kick[0] : 0.0;
-    double worst2 = 0.0;
+    double worst2 = 0.0, step2 = 0.0;
     bool runaway = false;
     for (std::size_t i = 0; i < n; ++i) {
       const double h = decltype(uniform)::value ? h0 : half_kick[i];
@@ -336,6 +357,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
           x[d] += dt * v[d];
         }
       }
+      step2 = std::max(step2, (x - p.pos[i]).squaredNorm());
       p.vel[i] = v;
       p.pos[i] = x;
       if constexpr (n_kicks == 2) {
@@ -348,6 +370,8 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
         worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
       runaway |= cells.runaway(x);
     }
+    if (step2 > step_limit2 && !runaway)
+      report_fast_particle(dt);
     return runaway ? -1 : (!x0 || worst2 > limit2) ? 1 : 0;
   };
   auto advance = [&](auto kicks) {
@@ -384,9 +408,35 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
       m_lb_substep = 0;
       try {
         m_lb->step();
+      } catch (const SimulationInstability& e) {
+        if (!last)
+          second_kick(); // leave the particles as a step that ended here
+        // a stiff coupling (gamma dt / m of order 1 and more) makes coupled
+        // particles and nodes overshoot: the fluid blows up, but the cause
+        // is gamma, which the fluid's message cannot know
+        const double max_half_kick =
+            n > 0 ? *std::max_element(half_kick.begin(), half_kick.end()) : 0.0;
+        const double stiffness = 2.0 * m_lb_coupling.params.gamma * max_half_kick;
+        if (m_lb_coupling.active && stiffness > 1.0)
+          throw SimulationInstability(
+              std::string(e.what()) +
+              ". The particle coupling may be the cause: gamma * time_step / mass = " +
+              format_number(stiffness) +
+              " (above about 1 particles and fluid overshoot); lower gamma or the time step");
+        throw;
       } catch (...) {
         if (!last)
           second_kick(); // leave the particles as a step that ended here
+        throw;
+      }
+    }
+    // every 16 steps: the caller may end the run here (Ctrl-C), with the
+    // particles as a run that ended with this step leaves them
+    if (!last && interruption_point && (step & 15) == 15) {
+      try {
+        interruption_point();
+      } catch (...) {
+        second_kick();
         throw;
       }
     }

@@ -1,5 +1,8 @@
 #include "system/system.hpp"
 
+#include <cmath>
+#include <limits>
+
 #include "utils/errors.hpp"
 
 #include <algorithm>
@@ -17,12 +20,12 @@ System::System(const Vec3& box_l, const std::array<bool, 3>& periodic)
 
 void System::set_time_step(double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt))
-    throw InputError("time_step must be a finite positive number, got " + std::to_string(dt));
+    throw InputError("time_step must be a finite positive number, got " + format_number(dt));
   if (m_lb) {
     const double ratio = m_lb->tau() / dt;
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || std::round(ratio) < 1)
-      throw InputError("time_step " + std::to_string(dt) +
-                       " does not divide the lattice-Boltzmann tau " + std::to_string(m_lb->tau()) +
+      throw InputError("time_step " + format_number(dt) +
+                       " does not divide the lattice-Boltzmann tau " + format_number(m_lb->tau()) +
                        " (tau must be an integer multiple of time_step)");
   }
   m_time_step = dt;
@@ -45,14 +48,18 @@ int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass,
                          int mol_id, const Vec3& ext_force, std::uint8_t fixed) {
   if (pid < 0)
     pid = particles.max_id() + 1;
+  if (pid < 0 || pid >= std::numeric_limits<int>::max())
+    throw InputError("id: particle ids must be in 0.." +
+                     std::to_string(std::numeric_limits<int>::max() - 1));
   if (particles.index(pid) >= 0)
     throw InputError("id: particle " + std::to_string(pid) + " already exists");
   if (!(mass > 0.0) || !std::isfinite(mass))
-    throw InputError("mass must be a finite positive number, got " + std::to_string(mass));
+    throw InputError("mass must be a finite positive number, got " + format_number(mass));
   if (type < 0)
     throw InputError("type must be a non-negative integer, got " + std::to_string(type));
   if (!pos.allFinite() || !vel.allFinite() || !ext_force.allFinite())
     throw InputError("pos, v and ext_force must be finite (particle " + std::to_string(pid) + ")");
+  check_position_range(pos, pid);
   particles.add(pid, pos, Vec3i::Zero(), vel, mass, type, mol_id, ext_force, fixed);
   cells.invalidate();
   invalidate_forces();
@@ -92,6 +99,17 @@ void System::clear_particles() {
   }
   cells.invalidate();
   invalidate_forces();
+}
+
+void System::check_position_range(const Vec3& pos, int pid) const {
+  // the periodic image counters are ints: beyond 1e9 box lengths they would
+  // overflow when the position is folded (the integrator stops a particle
+  // that flies that far as a blow-up)
+  for (int d = 0; d < 3; ++d)
+    if (std::abs(pos[d]) > 1e9 * box.length()[d])
+      throw InputError("pos: particle " + std::to_string(pid) + " at " + format_number(pos[d]) +
+                       " along axis " + std::to_string(d) +
+                       " is more than 1e9 box lengths from the box; positions must be within that");
 }
 
 int System::checked_index(int pid) const {

@@ -16,6 +16,7 @@
 #include "system/box_geometry.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -70,6 +71,9 @@ public:
   void clear_particles();
   /** Local index of id, throwing InputError when it does not exist. */
   int checked_index(int pid) const;
+  /** Throws InputError when pos is too far from the box to be folded (its
+   *  image counter would overflow), naming particle pid. */
+  void check_position_range(const Vec3& pos, int pid) const;
 
   // --- interactions -----------------------------------------------------------
   // Changes of the force field go through methods of System that mark the
@@ -93,6 +97,11 @@ public:
     invalidate_forces();
   }
   void add_exclusion(int id1, int id2) {
+    checked_index(id1); // both must exist: the exclusion lists are indexed by id
+    checked_index(id2);
+    if (id1 == id2)
+      throw InputError("a particle cannot be excluded from itself (id " + std::to_string(id1) +
+                       ")");
     cells.add_exclusion(id1, id2);
     invalidate_forces();
   }
@@ -143,6 +152,14 @@ public:
   // --- integration ------------------------------------------------------------
   /** n velocity-Verlet steps, all in C++. */
   void integrate(int n_steps, bool recalc_forces = false, bool reuse_forces = false);
+  /** Throws SimulationInstability naming the fastest particle (a drift of
+   *  more than half the box in one step of length dt). */
+  [[noreturn]] void report_fast_particle(double dt) const;
+  /** Called by integrate every few steps, where the particles are as at the
+   *  end of a step; an exception it throws (the Python layer's
+   *  KeyboardInterrupt on Ctrl-C) ends the run there, as if it had been
+   *  asked for that many steps. Empty: never called. */
+  std::function<void()> interruption_point;
   /** Recompute all forces for the current positions (no time advance). */
   void compute_forces();
   Energies compute_energies();

@@ -2,6 +2,7 @@
 // InputError -> ValueError, SimulationInstability -> lbmd.SimulationInstability.
 #pragma once
 
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -18,4 +19,13 @@ struct SimulationInstability : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-}  // namespace pyoif
+/** A number for a message: 10 significant digits, exponent where needed
+ *  (std::to_string's fixed 6 decimals shows 1e-7 as 0.000000). */
+inline std::string format_number(double x) {
+  std::ostringstream s;
+  s.precision(10);
+  s << x;
+  return s.str();
+}
+
+} // namespace pyoif

@@ -20,8 +20,10 @@ template <class Model> void bind_pair_model(py::class_<System, std::shared_ptr<S
   sys.def(("set_" + name).c_str(), [](System& s, int t1, int t2, const typename Model::Params& p) {
     s.set_nonbonded<Model>(t1, t2, p);
   });
-  sys.def(("get_" + name).c_str(),
-          [](System& s, int t1, int t2) { return s.nonbonded.at(t1, t2).template get<Model>(); });
+  sys.def(("get_" + name).c_str(), [](const System& s, int t1, int t2) {
+    // reading does not grow the table: a pair never set has defaults
+    return s.nonbonded.entry_or_default(t1, t2).template get<Model>();
+  });
 }
 
 template <class IA, class = void> struct has_reference_check : std::false_type {};

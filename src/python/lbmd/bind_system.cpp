@@ -8,6 +8,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
 
 namespace py = pybind11;
@@ -69,11 +71,19 @@ void set_vectors(System& s, const std::string& field, const IdArray& ids, const 
                      ", 3)");
   auto r = values.unchecked<2>();
   auto& p = s.particles;
+  if (field != "pos" && field != "v" && field != "ext_force" && field != "f")
+    throw InputError("property '" + field + "' cannot be set");
+  // all values are checked before any is set: a refused slice stays as it was
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const Vec3 v(r(n, 0), r(n, 1), r(n, 2));
     if (!v.allFinite())
       throw InputError(field + ": values must be finite (particle " + std::to_string(p.id[idx[n]]) +
                        ")");
+    if (field == "pos")
+      s.check_position_range(v, p.id[idx[n]]);
+  }
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const Vec3 v(r(n, 0), r(n, 1), r(n, 2));
     const int i = idx[n];
     if (field == "pos") {
       p.pos[i] = v;
@@ -83,10 +93,8 @@ void set_vectors(System& s, const std::string& field, const IdArray& ids, const 
       p.vel[i] = v;
     else if (field == "ext_force")
       p.ext_force[i] = v;
-    else if (field == "f")
-      p.force[i] = v;
     else
-      throw InputError("property '" + field + "' cannot be set");
+      p.force[i] = v;
   }
   if (field != "f") // forces set by hand are the ones to start from
     s.invalidate_forces();
@@ -124,25 +132,40 @@ void set_scalars(System& s, const std::string& field, const IdArray& ids, const 
     throw InputError(field + ": expected " + std::to_string(idx.size()) + " values");
   auto r = values.unchecked<1>();
   auto& p = s.particles;
+  constexpr double int_max = std::numeric_limits<int>::max();
+  constexpr double int_min = std::numeric_limits<int>::min();
+  auto integral_in = [](double x, double lo, double hi) {
+    // NaN and values beyond int would turn into arbitrary ids
+    return x >= lo && x <= hi && x == std::floor(x);
+  };
+  // all values are checked before any is set: a refused slice stays as it was
+  for (std::size_t n = 0; n < idx.size(); ++n) {
+    const double x = r(n);
+    if (field == "mass" && (!(x > 0.0) || !std::isfinite(x)))
+      throw InputError("mass must be a finite positive number, got " + format_number(x));
+    if (field == "type" && !integral_in(x, 0.0, int_max))
+      throw InputError("type must be an integer in 0..2147483647, got " + format_number(x));
+    if (field == "mol_id" && !integral_in(x, int_min, int_max))
+      throw InputError("mol_id must be an integer, got " + format_number(x));
+    if (field == "fix" && !integral_in(x, 0.0, 7.0))
+      throw InputError("fix must be a mask of 3 flags (0..7), got " + format_number(x));
+    if (field != "mass" && field != "type" && field != "mol_id" && field != "fix")
+      throw InputError("property '" + field + "' cannot be set");
+  }
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const int i = idx[n];
     const double x = r(n);
-    if (field == "mass") {
-      if (!(x > 0.0) || !std::isfinite(x))
-        throw InputError("mass must be a finite positive number, got " + std::to_string(x));
+    if (field == "mass")
       p.mass[i] = x;
-    } else if (field == "type") {
-      if (x < 0)
-        throw InputError("type must be a non-negative integer");
+    else if (field == "type")
       p.type[i] = static_cast<int>(x);
-      s.cells.invalidate();
-    } else if (field == "mol_id")
+    else if (field == "mol_id")
       p.mol_id[i] = static_cast<int>(x);
-    else if (field == "fix")
-      p.fixed[i] = static_cast<std::uint8_t>(x);
     else
-      throw InputError("property '" + field + "' cannot be set");
+      p.fixed[i] = static_cast<std::uint8_t>(x);
   }
+  if (field == "type")
+    s.cells.invalidate();
   if (field == "type" || field == "mol_id") // the interactions that apply change
     s.invalidate_forces();
 }
@@ -251,8 +274,27 @@ void bind_system(py::module_& m) {
       .def("langevin_off", &System::langevin_off)
       .def_property_readonly("langevin", [](const System& s) { return s.langevin(); })
       // integration
-      .def("integrate", &System::integrate, py::arg("steps"), py::arg("recalc_forces") = false,
-           py::arg("reuse_forces") = false, py::call_guard<py::gil_scoped_release>())
+      // The run keeps the GIL: no other Python thread can change the system
+      // under it (a part.clear() from a second thread would free the
+      // particles the loop is using), and Ctrl-C is seen every 16 steps
+      // (one rank only: under MPI a rank leaving alone would hang the others).
+      .def(
+          "integrate",
+          [](System& s, int steps, bool recalc_forces, bool reuse_forces) {
+            if (s.comm.size() == 1)
+              s.interruption_point = [] {
+                if (PyErr_CheckSignals() != 0)
+                  throw py::error_already_set();
+              };
+            try {
+              s.integrate(steps, recalc_forces, reuse_forces);
+            } catch (...) {
+              s.interruption_point = nullptr;
+              throw;
+            }
+            s.interruption_point = nullptr;
+          },
+          py::arg("steps"), py::arg("recalc_forces") = false, py::arg("reuse_forces") = false)
       .def("compute_forces", &System::compute_forces)
       .def("energies",
            [](System& s) {

@@ -45,6 +45,8 @@ class Constraints:
         c = args[0] if args else ShapeBasedConstraint(**kwargs)
         if not isinstance(c, Constraint):
             raise TypeError(f"constraints.add: expected a constraint, got {type(c).__name__}")
+        if any(x is c for x in self._list):
+            raise ValueError("constraints.add: this constraint was already added (its force would count twice)")
         self._system._core.add_constraint(c._core)
         self._list.append(c)
         return c

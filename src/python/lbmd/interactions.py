@@ -9,7 +9,7 @@ BondedInteraction subclass).
 import numpy as np
 
 from . import _lbmd
-from .validation import Param, ParameterObject, parse, positive, non_negative, greater_than_one
+from .validation import Param, ParameterObject, parse, positive, non_negative
 
 
 # ---------------------------------------------------------------------------
@@ -26,7 +26,10 @@ class NonBondedModel:
     def __init__(self, system, t1, t2):
         self._system, self._types = system, (t1, t2)
 
-    def set_params(self, **kwargs):
+    def set_params(self, *args, **kwargs):
+        if args:
+            raise TypeError(f"{self.name}.set_params: parameters are keywords, e.g. "
+                            f"set_params({', '.join(q.name + '=...' for q in self._params)})")
         values = parse(f"{self.name}[{self._types[0]}, {self._types[1]}]", self._params, kwargs)
         self._check(values)
         getattr(self._system._core, "set_" + self.name)(*self._types, self._core_params(**values))
@@ -111,8 +114,8 @@ class NonBondedInteractions:
         if not (isinstance(key, tuple) and len(key) == 2):
             raise TypeError("non_bonded_inter: index with two particle types, e.g. [0, 1]")
         for t in key:
-            if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or t < 0:
-                raise ValueError(f"non_bonded_inter: particle types must be integers >= 0, got {t!r}")
+            if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or not 0 <= t <= 1023:
+                raise ValueError(f"non_bonded_inter: particle types must be integers in 0..1023, got {t!r}")
         return NonBondedTypePair(self._system, int(key[0]), int(key[1]))
 
 

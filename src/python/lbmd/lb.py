@@ -17,6 +17,24 @@ from .validation import Param, ParameterObject, non_negative, positive
 _COLLISIONS = ("MRT", "TRT", "BGK")
 
 
+def _cpus():
+    """CPUs this process may run on (its affinity mask: a batch slot's share)."""
+    import os
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def _threads_param():
+    # more threads than CPUs never helps the memory-bound kernel (a few more
+    # are allowed, e.g. for tests), and a failed thread creation would end
+    # the interpreter inside OpenMP
+    limit = 4 * _cpus()
+    return Param("n_threads", "int", 0, check=(lambda n: 0 <= n <= limit,
+                                               f"in 0..{limit} (4 x the CPUs this process may use)"))
+
+
 class LBFluid(ParameterObject):
     """D3Q19 lattice-Boltzmann fluid; collision 'MRT' (default; fluctuating
     MRT when kT > 0), 'TRT' (magic parameter 3/16) or 'BGK'."""
@@ -29,11 +47,10 @@ class LBFluid(ParameterObject):
                      doc="kinematic bulk viscosity (MRT; default visc)"),
                Param("ext_force_density", "vec3", np.zeros(3), doc="force per volume"),
                Param("kT", "float", 0.0, check=non_negative, doc="thermal energy"),
-               Param("seed", "int", None, check=non_negative, doc="RNG seed (required if kT > 0)"),
+               Param("seed", "seed", None, check=non_negative, doc="RNG seed (required if kT > 0)"),
                Param("collision", "object", "MRT", cls=str,
                      check=(lambda s: s.upper() in _COLLISIONS, "one of 'MRT', 'TRT', 'BGK'")),
-               Param("n_threads", "int", 0, check=non_negative,
-                     doc="OpenMP threads (0: OMP_NUM_THREADS if set, else 1)")]
+               _threads_param()]
 
     def _validate(self):
         if self.kT > 0 and self.seed is None:
@@ -88,7 +105,7 @@ class LBFluid(ParameterObject):
                 self._core.set_ext_force_density(f)
             self.__dict__["_values"]["ext_force_density"] = f
         elif name == "n_threads":
-            n = Param("n_threads", "int", check=non_negative).convert("LBFluid", value)
+            n = _threads_param().convert("LBFluid", value)
             if self._core is not None:
                 self._core.n_threads = n
             self.__dict__["_values"]["n_threads"] = n
@@ -194,6 +211,8 @@ class LBFluidRoutines:
                              f"selected nodes, shape {target_shape}") from None
         if prop == "density" and np.any(value <= 0):
             raise ValueError("LBFluid: density must be > 0")
+        if prop == "population" and np.any(full[idx].sum(axis=-1) <= 0):
+            raise ValueError("LBFluid: the populations of a node must add up to a density > 0")
         core.set_block(prop, self._lo, self._hi, np.ascontiguousarray(full))
 
     velocity = property(lambda self: self._get("velocity"),
@@ -204,3 +223,14 @@ class LBFluidRoutines:
                           lambda self, v: self._set("population", v))
     boundary = property(lambda self: self._get("boundary"))
     pressure_tensor = property(lambda self: self._get("pressure_tensor"))
+
+    def __setattr__(self, name, value):
+        # a misspelt property (lbf[0, 0, 0].vel = ...) would otherwise be
+        # stored on this temporary object and change nothing
+        if name.startswith("_") or name in ("velocity", "density", "population"):
+            object.__setattr__(self, name, value)
+        elif name in self._shapes:
+            raise AttributeError(f"LBFluid: node property '{name}' is read-only")
+        else:
+            raise AttributeError(f"LBFluid: nodes have no property '{name}' (settable: velocity, "
+                                 f"density, population; readable also: boundary, pressure_tensor)")

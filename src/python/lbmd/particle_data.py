@@ -10,17 +10,42 @@ _SCALAR_PROPS = ("mass", "type", "mol_id")
 _ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
 
 
-def _ids_array(ids):
-    return np.ascontiguousarray(np.atleast_1d(np.asarray(ids, dtype=np.int32)))
+#: ids, types and mol_ids are C++ ints; the largest id leaves room for max_id() + 1
+INT32_MAX = 2**31 - 1
 
 
-def _fix_to_mask(fix, n):
+def _integers(owner, name, value, lo=0, hi=INT32_MAX):
+    """value (an integer or array of integers) as an int32 array, refused
+    (naming owner and parameter) when not integers or outside [lo, hi]:
+    no silent truncation of 1.7 or wrap-around of 2**40."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError):
+        arr = np.asarray(None, dtype=object)
+    if arr.dtype == object and arr.size:  # Python ints beyond int64, mixed lists
+        if all(isinstance(x, numbers.Integral) and not isinstance(x, bool) for x in arr.ravel()):
+            bad = [int(x) for x in arr.ravel() if not lo <= int(x) <= hi]
+            raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {bad[0]}")
+    if arr.size and arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.floor(arr)):
+        pass  # whole numbers stored as floats (np.zeros(n)) are fine; 1.7 is not
+    elif arr.size and (arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer)):
+        raise TypeError(f"{owner}: parameter '{name}' must be an integer or integers, got {value!r}")
+    if arr.size and (arr.min() < lo or arr.max() > hi):
+        bad = arr.min() if arr.min() < lo else arr.max()
+        raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {int(bad)}")
+    return np.ascontiguousarray(np.atleast_1d(arr).astype(np.int32))
+
+
+def _ids_array(ids, owner="particles", name="id"):
+    return _integers(owner, name, ids, 0, INT32_MAX - 1)
+
+
+def _fix_to_mask(fix, n, what="ParticleList.add: parameter 'fix'"):
     fix = np.asarray(fix, dtype=bool)
     if fix.shape == (3,):
         fix = np.broadcast_to(fix, (n, 3))
     if fix.shape != (n, 3):
-        raise ValueError(f"ParticleList.add: parameter 'fix' must be 3 booleans per particle, "
-                         f"got shape {fix.shape}")
+        raise ValueError(f"{what} must be 3 booleans per particle, got shape {fix.shape}")
     return (fix[:, 0] * 1 + fix[:, 1] * 2 + fix[:, 2] * 4).astype(np.int32)
 
 
@@ -66,12 +91,21 @@ class _ParticleView:
         if name in _VECTOR_PROPS:
             self._core.set_vectors(name, self._ids, self._vec_in(name, value))
         elif name in _SCALAR_PROPS:
-            arr = np.asarray(value, dtype=float)
-            if arr.ndim == 0:
-                arr = np.full(len(self._ids), float(arr))
-            self._core.set_scalars(name, self._ids, np.ascontiguousarray(arr))
+            if name == "mass":
+                try:
+                    arr = np.asarray(value, dtype=float)
+                except (TypeError, ValueError):
+                    raise TypeError(f"particle property 'mass' must be a number, got {value!r}") from None
+            else:  # type >= 0, mol_id any int32
+                arr = _integers("particle property", name, value, 0 if name == "type" else -2**31)
+            if arr.ndim == 0 or arr.shape == (1,) and len(self._ids) != 1:
+                arr = np.full(len(self._ids), arr.reshape(-1)[0], dtype=arr.dtype)
+            if arr.shape != (len(self._ids),):
+                raise ValueError(f"particle property '{name}' must be one value per particle, "
+                                 f"got shape {np.shape(value)} for {len(self._ids)} particle(s)")
+            self._core.set_scalars(name, self._ids, np.ascontiguousarray(arr, dtype=float))
         elif name == "fix":
-            mask = _fix_to_mask(value, len(self._ids))
+            mask = _fix_to_mask(value, len(self._ids), "particle property 'fix'")
             self._core.set_scalars("fix", self._ids, mask.astype(float))
         elif name in _READONLY_VECTOR_PROPS or name == "id":
             raise AttributeError(f"particle property '{name}' is read-only")
@@ -107,11 +141,15 @@ class ParticleHandle(_ParticleView):
         for p in ids:
             if isinstance(p, bool) or not isinstance(p, numbers.Integral):
                 raise TypeError(f"add_bond: partners must be particle ids or handles, got {p!r}")
-        self._system.bonded_inter._add_bonds(ia, np.asarray([ids], dtype=np.int32))
+        ids = _ids_array(ids, "add_bond", "partner")
+        self._system.bonded_inter._add_bonds(ia, ids.reshape(1, -1))
 
     def delete_bond(self, bond):
+        if not isinstance(bond, tuple) or len(bond) < 2:
+            raise TypeError("delete_bond: expected a tuple (bond, partner_id, ...)")
         ia, partners = bond[0], bond[1:]
-        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else int(p) for p in partners]
+        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else p for p in partners]
+        ids = _ids_array(ids, "delete_bond", "partner").tolist()
         if not self._core.remove_bond(self._system.bonded_inter._id_of(ia), ids):
             raise ValueError(f"delete_bond: particle {self.id} has no such bond")
 
@@ -125,11 +163,24 @@ class ParticleHandle(_ParticleView):
                     out.append((ia,) + tuple(int(x) for x in row[1:]))
         return tuple(out)
 
+    def _partner(self, what, pid):
+        if isinstance(pid, ParticleHandle):
+            pid = pid.id
+        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
+            raise TypeError(f"{what}: the partner must be a particle id or handle, got {pid!r}")
+        pid = int(_ids_array(pid, what, "partner")[0])
+        if not self._core.exists(pid):
+            raise ValueError(f"{what}: partner particle {pid} does not exist")
+        if pid == self.id:
+            raise ValueError(f"{what}: a particle cannot be excluded from itself (id {pid})")
+        return pid
+
     def add_exclusion(self, pid):
-        self._core.add_exclusion(self.id, int(pid))
+        """No non-bonded interaction between this particle and pid."""
+        self._core.add_exclusion(self.id, self._partner("add_exclusion", pid))
 
     def delete_exclusion(self, pid):
-        self._core.remove_exclusion(self.id, int(pid))
+        self._core.remove_exclusion(self.id, self._partner("delete_exclusion", pid))
 
     def to_dict(self):
         return {k: getattr(self, k) for k in ("id", "pos", "v", "f", "mass", "type", "mol_id",
@@ -217,12 +268,18 @@ class ParticleList:
                 raise ValueError(f"ParticleList.add: parameter '{name}' must be finite")
             return np.ascontiguousarray(arr)
 
-        def per_particle_scalar(name, default, integer):
+        def per_particle_scalar(name, default, integer, lo=0, hi=INT32_MAX):
             value = kwargs.get(name, default)
-            arr = np.asarray(value)
-            if arr.dtype == bool or (integer and arr.size and not np.issubdtype(arr.dtype, np.integer)):
-                raise TypeError(f"ParticleList.add: parameter '{name}' must be an integer, got {value!r}")
-            if not integer and not np.issubdtype(arr.dtype, np.number):
+            if integer:
+                arr = _integers("ParticleList.add", name, value, lo, hi)
+                if np.ndim(value) == 0:
+                    arr = arr.reshape(())
+            else:
+                try:
+                    arr = np.asarray(value)
+                except (TypeError, ValueError):
+                    arr = np.asarray(None, dtype=object)
+            if arr.dtype == bool or (not integer and not np.issubdtype(arr.dtype, np.number)):
                 raise TypeError(f"ParticleList.add: parameter '{name}' must be a number, got {value!r}")
             if arr.ndim == 0:
                 arr = np.full(n, arr)
@@ -237,17 +294,15 @@ class ParticleList:
         if not np.all(mass > 0):
             raise ValueError(f"ParticleList.add: parameter 'mass' must be > 0, got {kwargs['mass']!r}")
         ptype = per_particle_scalar("type", 0, True)
-        if np.any(ptype < 0):
-            raise ValueError(f"ParticleList.add: parameter 'type' must be >= 0, got {kwargs['type']!r}")
-        mol_id = per_particle_scalar("mol_id", 0, True)
+        mol_id = per_particle_scalar("mol_id", 0, True, -2**31)
         if "id" in kwargs:
-            ids = per_particle_scalar("id", 0, True)
-            if np.any(ids < 0):
-                raise ValueError("ParticleList.add: parameter 'id' must be >= 0")
+            ids = per_particle_scalar("id", 0, True, 0, INT32_MAX - 1)
             if len(np.unique(ids)) != n:
                 raise ValueError("ParticleList.add: parameter 'id' has duplicate ids")
         else:
             first = self._core.max_id() + 1
+            if first + n - 1 > INT32_MAX - 1:
+                raise ValueError(f"ParticleList.add: no ids left above {first - 1} for {n} particles")
             ids = np.arange(first, first + n, dtype=np.int32)
         fix = _fix_to_mask(kwargs.get("fix", [False, False, False]), n)
         for pid in ids:
@@ -260,10 +315,12 @@ class ParticleList:
         return ParticleSlice(self._system, new_ids)
 
     def by_id(self, pid):
-        return ParticleHandle(self._system, pid)
+        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
+            raise TypeError(f"by_id: parameter 'pid' must be an integer particle id, got {pid!r}")
+        return ParticleHandle(self._system, int(_ids_array(pid, "by_id", "pid")[0]))
 
     def by_ids(self, ids):
-        ids = _ids_array(ids)
+        ids = _ids_array(ids, "by_ids", "ids")
         for pid in ids:
             if not self._core.exists(int(pid)):
                 raise IndexError(f"particle id {pid} does not exist")
@@ -281,7 +338,9 @@ class ParticleList:
         return ParticleSlice(self._system, sl._ids[mask])
 
     def exists(self, pid):
-        return bool(self._core.exists(int(pid)))
+        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
+            raise TypeError(f"exists: parameter 'pid' must be an integer particle id, got {pid!r}")
+        return 0 <= pid < INT32_MAX and bool(self._core.exists(int(pid)))
 
     def clear(self):
         self._core.clear_particles()

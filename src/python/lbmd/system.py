@@ -1,6 +1,5 @@
 """lbmd.System and its parts: cell_system, integrator, thermostat, actors,
 analysis (ESPResSo 4.2 names)."""
-import numbers
 
 import numpy as np
 
@@ -77,7 +76,7 @@ class Thermostat:
     def set_langevin(self, kT=None, gamma=None, seed=None):
         v = parse("thermostat.set_langevin",
                   [Param("kT", "float", check=non_negative), Param("gamma", "float", check=non_negative),
-                   Param("seed", "int", None, check=non_negative)],
+                   Param("seed", "seed", None, check=non_negative)],
                   {k: x for k, x in (("kT", kT), ("gamma", gamma), ("seed", seed)) if x is not None})
         if v["kT"] > 0 and v["seed"] is None:
             raise ValueError("thermostat.set_langevin: parameter 'seed' is required when kT > 0")
@@ -90,7 +89,7 @@ class Thermostat:
             raise TypeError("thermostat.set_lb: parameter 'LB_fluid' must be an lbmd.lb.LBFluid, "
                             f"got {type(LB_fluid).__name__}")
         v = parse("thermostat.set_lb", [Param("gamma", "float", check=non_negative),
-                                        Param("seed", "int", 0, check=non_negative)],
+                                        Param("seed", "seed", 0, check=non_negative)],
                   {k: x for k, x in (("gamma", gamma), ("seed", seed)) if x is not None})
         if LB_fluid.kT > 0 and seed is None:
             raise ValueError("thermostat.set_lb: parameter 'seed' is required when the fluid has kT > 0")
@@ -195,6 +194,8 @@ class Analysis:
 
     def center_of_mass(self, p_type):
         sel = self._system.part.select(type=p_type)
+        if len(sel) == 0:
+            raise ValueError(f"analysis.center_of_mass: no particle of type {p_type!r}")
         m = sel.mass
         return (sel.pos * m[:, None]).sum(axis=0) / m.sum()
 
@@ -252,8 +253,12 @@ class System:
             self.__dict__["_time_step_set"] = True
         elif name == "time":
             self._core.time = parse("System", [Param("time", "float")], {"time": value})["time"]
-        elif name in ("min_global_cut", "max_oif_objects"):
-            self.__dict__[name] = value
+        elif name == "min_global_cut":
+            self.__dict__[name] = parse("System", [Param("min_global_cut", "float", check=non_negative)],
+                                        {name: value})[name]
+        elif name == "max_oif_objects":
+            self.__dict__[name] = parse("System", [Param("max_oif_objects", "int", check=non_negative)],
+                                        {name: value})[name]
         else:
             raise AttributeError(f"System has no settable attribute '{name}'")
 

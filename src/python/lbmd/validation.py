@@ -16,7 +16,8 @@ REQUIRED = object()
 class Param:
     """One parameter: name, kind, default, and an optional range check.
 
-    kind is one of 'float', 'int', 'bool', 'vec3' (3 floats), 'bool3'
+    kind is one of 'float', 'int' (32-bit), 'seed' (64-bit unsigned), 'bool',
+    'vec3' (3 floats), 'bool3'
     (3 bools), 'int_array', 'object' (any value, or an instance of `cls`).
     `check` is a (predicate, description) pair, e.g. ``positive``.
     """
@@ -32,23 +33,33 @@ class Param:
     def convert(self, owner, value):
         where = f"{owner}: parameter '{self.name}'"
         k = self.kind
+        if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+            value = value.item()  # np.array(0.01) as 0.01
         if k == "float":
             if isinstance(value, bool) or not isinstance(value, numbers.Real):
                 raise TypeError(f"{where} must be a number, got {value!r}")
             value = float(value)
             if not math.isfinite(value):
                 raise ValueError(f"{where} must be finite, got {value!r}")
-        elif k == "int":
+        elif k in ("int", "seed"):
             if isinstance(value, bool) or not isinstance(value, numbers.Integral):
                 raise TypeError(f"{where} must be an integer, got {value!r}")
             value = int(value)
+            # the engine's ints are 32-bit, its seeds 64-bit unsigned: a larger
+            # value would not reach it (or wrap around)
+            lo, hi = (-2**31, 2**31 - 1) if k == "int" else (0, 2**64 - 1)
+            if not lo <= value <= hi:
+                raise ValueError(f"{where} must be in {lo}..{hi}, got {value!r}")
         elif k == "bool":
             if not isinstance(value, (bool, np.bool_)):
                 raise TypeError(f"{where} must be True or False, got {value!r}")
             value = bool(value)
         elif k == "vec3":
             try:
-                arr = np.asarray(value, dtype=float)
+                raw = np.asarray(value)
+                if raw.dtype.kind not in "iuf":  # no strings or booleans for numbers
+                    raise TypeError
+                arr = raw.astype(float)
             except (TypeError, ValueError):
                 raise TypeError(f"{where} must be 3 numbers, got {value!r}") from None
             if arr.shape != (3,):
@@ -120,7 +131,10 @@ class ParameterObject:
 
     _params = []
 
-    def __init__(self, **kwargs):
+    def __init__(self, *args, **kwargs):
+        if args:
+            raise TypeError(f"{type(self).__name__}: parameters are keywords, e.g. "
+                            f"{type(self).__name__}({', '.join(p.name + '=...' for p in self._params[:2])})")
         object.__setattr__(self, "_values", parse(type(self).__name__, self._params, kwargs))
         self._validate()
 
@@ -135,6 +149,16 @@ class ParameterObject:
         if name in values:
             return values[name]
         raise AttributeError(f"{type(self).__name__} has no attribute '{name}'")
+
+    def __setattr__(self, name, value):
+        # ESPResSo scripts may try `sphere.radius = 5`: refused, as storing it
+        # on the Python object would change nothing in the engine
+        if name.startswith("_"):
+            object.__setattr__(self, name, value)
+            return
+        kind = type(self).__name__
+        raise AttributeError(f"{kind}: '{name}' cannot be changed after creation; create a new "
+                             f"{kind}(...) with the new value")
 
     def __repr__(self):
         args = ", ".join(f"{k}={_fmt(v)}" for k, v in self._values.items())

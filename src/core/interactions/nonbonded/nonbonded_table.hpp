@@ -17,12 +17,12 @@ template <class Tuple> struct params_of;
 template <class... M> struct params_of<std::tuple<M...>> {
   using type = std::tuple<typename M::Params...>;
 };
-}  // namespace detail
+} // namespace detail
 
 /** All models' parameters for one type pair. */
 struct PairParams {
   detail::params_of<NonbondedModels>::type models;
-  double range = 0.0;  ///< largest active cutoff (0: no interaction)
+  double range = 0.0; ///< largest active cutoff (0: no interaction)
 
   template <class M> typename M::Params& get() { return std::get<typename M::Params>(models); }
   template <class M> const typename M::Params& get() const {
@@ -30,8 +30,9 @@ struct PairParams {
   }
   void update_range() {
     range = 0.0;
-    std::apply([&](const auto&... p) { ((range = p.active() ? std::max(range, p.range()) : range), ...); },
-               models);
+    std::apply(
+        [&](const auto&... p) { ((range = p.active() ? std::max(range, p.range()) : range), ...); },
+        models);
   }
 };
 
@@ -44,6 +45,16 @@ public:
     const int n = std::max(t1, t2) + 1;
     if (n > m_n_types)
       resize(n);
+    return m_entries[t1 * m_n_types + t2];
+  }
+  /** Entry for (t1, t2) to read, without growing the table (a pair outside
+   *  it: the default entry, every model off). */
+  const PairParams& entry_or_default(int t1, int t2) const {
+    check_type(t1);
+    check_type(t2);
+    static const PairParams none{};
+    if (t1 >= m_n_types || t2 >= m_n_types)
+      return none;
     return m_entries[t1 * m_n_types + t2];
   }
   /** Entry for reading in the hot loop; nullptr when the types have no entry. */
@@ -68,9 +79,13 @@ public:
   int n_types() const { return m_n_types; }
 
 private:
+  /** The table is dense in the largest type: 1024 types are 10^6 entries
+   *  (about 100 MB); beyond, a typo would ask for gigabytes. */
+  static constexpr int max_type = 1023;
   static void check_type(int t) {
-    if (t < 0 || t > 10000)
-      throw InputError("particle type must be an integer in [0, 10000], got " + std::to_string(t));
+    if (t < 0 || t > max_type)
+      throw InputError("non-bonded interactions: particle types must be integers in 0.." +
+                       std::to_string(max_type) + ", got " + std::to_string(t));
   }
   void resize(int n) {
     std::vector<PairParams> e(static_cast<std::size_t>(n) * n);
@@ -104,4 +119,4 @@ inline Vec3 pair_force(const PairParams& params, const PairContext& c, double* e
   return f;
 }
 
-}  // namespace pyoif
+} // namespace pyoif
