@@ -282,6 +282,126 @@ class TestOifCell(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "vtk_file needs"):
             cell.elastic_forces(el_forces=6 * [0], vtk_file=self.path("x.vtk"))
 
+    def test_failed_constructor_leaves_nothing(self):
+        """Arguments are checked before particles are added; a failure after
+        that removes the particles again and does not use up a cell id."""
+        from unittest import mock
+        for ids, exc in (([500], ValueError), (5, TypeError), (None, TypeError), (["a"], ValueError)):
+            with self.assertRaisesRegex(exc, "'rotation_ids'"):
+                oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15], rotation_ids=ids)
+        with self.assertRaisesRegex(TypeError, "'particle_type'"):
+            oif.OifCell(cell_type=self.ct, particle_type=2**31, origin=[10, 15, 15])
+        for bad in (dict(origin=["1", "2", "3"]), dict(origin=[10, 15, 15], rotate="abc")):
+            with self.assertRaisesRegex(TypeError, "must be 3 numbers"):
+                oif.OifCell(cell_type=self.ct, particle_type=0, **bad)
+        with mock.patch.object(oif.OifCell, "_add_bonds", side_effect=RuntimeError("engine failure")):
+            with self.assertRaisesRegex(RuntimeError, "engine failure"):
+                oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        self.assertEqual(len(self.system.part), 0)
+        self.assertEqual(self.system.max_oif_objects, 0)
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15], rotation_ids=[5])
+        self.assertEqual(cell.cell_id, 0)
+        self.assertEqual(len(self.system.part), 374)
+
+    def test_half_box_rule(self):
+        """A cell spanning half a periodic box length would get wrong bond forces."""
+        big = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(8.0, 8.0, 8.0))
+        with self.assertRaisesRegex(ValueError, r"spans 16(\.0*)? along y, not less than half the periodic box "
+                                                r"length 30"):
+            oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
+        self.assertEqual(len(self.system.part), 0)
+        self.system.periodicity = [True, False, False]
+        cell = oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
+        self.assertAlmostEqual(cell.volume(), big.volume0, places=9)
+
+    def test_stale_cell_objects(self):
+        """After clear() or removal, a cell object refuses to compute on other particles."""
+        oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 8, 8])  # cell_id 0
+        a = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 22, 22])
+        b = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[30, 15, 15])
+        b.particles[5].remove()
+        for call in (b.volume, b.surface, b.get_origin, b.diameter, lambda: b.mesh.positions(),
+                     lambda: b.elastic_forces(f_metric=(1, 1, 1, 1, 1, 1)), lambda: b.particles,
+                     lambda: b.output_vtk_pos(self.path("b.vtk")), b.print_info):
+            with self.assertRaisesRegex(RuntimeError, r"OifCell \(cell_id 2\): its particles were removed"):
+                call()
+        self.assertFalse(os.path.exists(self.path("b.vtk")))
+        self.system.part.clear()
+        # new particles reuse the ids of a's particles: a must not compute on them
+        # (they get mol_id 0 by default, so cell 0 could not tell; cell ids never repeat)
+        self.system.part.add(pos=np.random.default_rng(0).random((1000, 3)) * 20)
+        for call in (a.volume, lambda: a.set_origin([5, 5, 5]), a.get_rotation_angles):
+            with self.assertRaisesRegex(RuntimeError, r"OifCell \(cell_id 1\): its particles were removed or "
+                                                      r"replaced \(particle 374 has mol_id 0, not 1\)"):
+                call()
+
+    def test_output_files(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        # a symlink keeps pointing at the (rewritten) target
+        target = self.path("target.vtk")
+        with open(target, "w") as f:
+            f.write("old\n")
+        os.symlink(target, self.path("link.vtk"))
+        cell.output_vtk_pos(self.path("link.vtk"))
+        self.assertTrue(os.path.islink(self.path("link.vtk")))
+        self.assertEqual(len(read_vtk(target)[0]), 374)
+        os.mkdir(self.path("folder.vtk"))
+        os.mkfifo(self.path("fifo.vtk"))
+        with open(self.path("afile"), "w") as f:
+            f.write("x")
+        for name, pattern in (("folder.vtk", "is a directory"), ("fifo.vtk", "not a regular file"),
+                              ("afile/x.vtk", "'.*afile' is a file, not a folder"), ("", "file name is empty")):
+            for write in (cell.output_vtk_pos, cell.output_mesh_nodes):
+                with self.subTest(name=name, write=write.__name__):
+                    with self.assertRaisesRegex(ValueError, pattern):
+                        write(self.path(name) if name else "")
+        self.assertEqual([f for f in os.listdir(self.tmp.name) if f.endswith(".tmp")], [])
+        # every writer creates a missing folder, as output_vtk_* does
+        cell.output_mesh_nodes(self.path("new1/n.dat"))
+        cell.output_raw_data(self.path("new2/r.dat"), data=cell.particles.v)
+        self.ct.mesh.output_mesh_triangles(self.path("new3/t.dat"))
+        self.ct.mesh.mirror(mirror_x=1, out_file_name=self.path("new4/m.dat"))
+        cell.elastic_forces(el_forces=(0, 0, 0, 0, 0, 1), raw_data_file=self.path("new5/e.dat"))
+        self.assertEqual(np.loadtxt(self.path("new1/n.dat")).shape, (374, 3))
+        self.assertEqual(np.loadtxt(self.path("new3/t.dat"), dtype=int).shape, (self.ct.mesh.get_n_triangles(), 3))
+        for bad in (None, "110000"):
+            with self.assertRaisesRegex(TypeError, "'f_metric' must be a list of 6 flags"):
+                cell.elastic_forces(f_metric=bad)
+        with self.assertRaisesRegex(TypeError, "point_data must be a dict"):
+            cell.output_vtk_pos(self.path("pd.vtk"), point_data=np.zeros(374))
+        with self.assertRaisesRegex(TypeError, "'lbfluid'"):
+            cell.total_fluid_force(None, 1.0)
+
+    def test_append_point_data(self):
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        f = self.path("c.vtk")
+        with self.assertRaisesRegex(ValueError, "not an existing VTK file"):
+            cell.append_point_data_to_vtk(file_name=f, data_name="a", data=np.zeros(374), first_append=True)
+        self.assertFalse(os.path.exists(f))
+        cell.output_vtk_pos(f)
+        with self.assertRaisesRegex(ValueError, "'data_name' must be a non-empty string without spaces"):
+            cell.append_point_data_to_vtk(file_name=f, data_name="a b", data=np.zeros(374), first_append=True)
+        with self.assertRaisesRegex(ValueError, "no POINT_DATA section yet"):
+            cell.append_point_data_to_vtk(file_name=f, data_name="a", data=np.zeros(374), first_append=False)
+        cell.append_point_data_to_vtk(file_name=f, data_name="a", data=np.arange(374.0), first_append=True)
+        with self.assertRaisesRegex(ValueError, "already has a POINT_DATA section"):
+            cell.append_point_data_to_vtk(file_name=f, data_name="b", data=np.zeros(374), first_append=True)
+        cell.append_point_data_to_vtk(file_name=f, data_name="b", data=np.ones(374), first_append=False)
+        _, _, data = read_vtk(f)
+        np.testing.assert_array_equal(data["a"], np.arange(374.0))
+        np.testing.assert_array_equal(data["b"], np.ones(374))
+        cell.output_vtk_pos(self.path("d.vtk"), point_data={"v": np.zeros(374)})
+        with self.assertRaisesRegex(ValueError, "already has a POINT_DATA section"):
+            cell.append_point_data_to_vtk(file_name=self.path("d.vtk"), data_name="y", data=np.zeros(374),
+                                          first_append=True)
+
+    def test_gamma_out_of_range_and_many_rings(self):
+        with self.assertRaisesRegex(ValueError, "visc=0.01 and dens=0.01 are outside the range"):
+            self.ct.suggest_LBgamma(visc=0.01, dens=0.01)
+        # rings beyond the mesh's edge-graph diameter: all pairs, at the cost of the diameter
+        cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15], exclusion_neighbours=10**7)
+        self.assertEqual(cell.n_exclusions, 374 * 373 // 2)
+
     @unittest.skipUnless(hasattr(lbmd.shapes, "Rhomboid") and hasattr(lbmd.shapes, "Cylinder"),
                          "lbmd.shapes.Rhomboid/Cylinder not built yet")
     def test_shape_vtk(self):

@@ -221,6 +221,83 @@ class TestMeshInput(unittest.TestCase):
             self.assertAlmostEqual(ct.volume0, ref.volume0, places=5, msg=ext)
             self.assertAlmostEqual(ct.surface0, ref.surface0, places=5, msg=ext)
 
+    def test_unreadable_files_and_directories(self):
+        nodes, tris = octahedron()
+        nf, tf = self.files.write(nodes, tris)
+        # binary bytes on line 3: a ValueError naming file and line, not UnicodeDecodeError
+        bad = os.path.join(self.tmp.name, "binary_nodes.dat")
+        with open(bad, "wb") as f:
+            f.write(b"1 0 0\n-1 0 0\n0 1 \x80\xff 0\n0 -1 0\n0 0 1\n0 0 -1\n")
+        with self.assertRaisesRegex(ValueError, f"{re_line(bad)[:-6]}3: not UTF-8 text"):
+            self.cell_type(bad, tf)
+        # an index too large for any integer type: ValueError with file and line, not OverflowError
+        huge = os.path.join(self.tmp.name, "huge_triangles.dat")
+        with open(huge, "w") as f:
+            f.write("0 4 2\n2 4 1\n1 4 " + "9" * 30 + "\n")
+        with self.assertRaisesRegex(ValueError, f"{re_line(huge)[:-6]}3: triangle node index value out of range"):
+            self.cell_type(nf, huge)
+        with self.assertRaisesRegex(ValueError, "is a directory"):
+            self.cell_type(self.tmp.name, tf)
+        with self.assertRaisesRegex(ValueError, "is a directory"):
+            self.cell_type(self.tmp.name + os.sep, "")
+        with self.assertRaisesRegex(TypeError, "'nodes_file' must be a file name"):
+            self.cell_type(np.array(nodes), tf)
+
+    def test_meshio_non_finite_points(self):
+        nodes, tris = octahedron()
+        path = os.path.join(self.tmp.name, "nan.off")
+        with open(path, "w") as f:
+            f.write("OFF\n6 8 0\n")
+            for i, p in enumerate(nodes):
+                f.write("nan 0 0\n" if i == 2 else f"{p[0]} {p[1]} {p[2]}\n")
+            f.write("".join(f"3 {a} {b} {c}\n" for a, b, c in tris))
+        with self.assertRaisesRegex(ValueError, "point 2 has non-finite coordinates"):
+            self.cell_type(path, "")
+
+    def test_from_arrays_checks(self):
+        nodes, tris = octahedron()
+        m = oif.Mesh.from_arrays(self.system, nodes, np.array(tris, dtype=float))  # whole floats pass
+        self.assertAlmostEqual(m.volume(), 4.0 / 3.0, places=12)
+        bad_nodes = nodes.copy()
+        bad_nodes[4, 1] = np.nan
+        cases = [(ValueError, "'nodes' must be an N x 3 array", nodes[:, :2], tris),
+                 (ValueError, "'nodes' must be an N x 3 array", nodes.ravel(), tris),
+                 (ValueError, r"node 4 \(row 4 of 'nodes'\) has non-finite", bad_nodes, tris),
+                 (TypeError, "'nodes' must be an N x 3 array of numbers", "abc", tris),
+                 (ValueError, "'triangles' must be an M x 3 array", nodes, np.ravel(tris)),
+                 (ValueError, "'triangles' must be an M x 3 array", nodes, [[0, 1, 2], [0, 1]]),
+                 (ValueError, r"triangle 1 \(row 1 of 'triangles'\) has non-integer", nodes,
+                  np.array(tris) + np.array([[0, 0, 0]] + [[0.5, 0, 0]] * 7)),
+                 (TypeError, "integer node indices", nodes, np.array(tris) > 0)]
+        for exc, pattern, n, t in cases:
+            with self.subTest(pattern=pattern):
+                with self.assertRaisesRegex(exc, pattern):
+                    oif.Mesh.from_arrays(self.system, n, t)
+
+    def test_mesh_without_files_and_parameters(self):
+        empty = oif.Mesh(system=self.system)
+        for call in (empty.volume, empty.surface, empty.get_n_nodes, empty.min_angle, empty.positions):
+            with self.assertRaisesRegex(ValueError, "has no nodes and triangles"):
+                call()
+        nf, tf = self.files.write(*octahedron())
+        with self.assertRaisesRegex(ValueError, "'particle_type'"):
+            oif.Mesh(nodes_file=nf, triangles_file=tf, system=self.system, particle_type=-5)
+        with self.assertRaisesRegex(ValueError, "'particle_mass'"):
+            oif.Mesh(nodes_file=nf, triangles_file=tf, system=self.system, particle_mass=-1)
+        with self.assertRaisesRegex(TypeError, "'resize' must be 3 numbers"):
+            oif.Mesh(nodes_file=nf, triangles_file=tf, system=self.system, resize=("1", "1", "1"))
+        with self.assertRaisesRegex(TypeError, "'resize' must be 3 numbers"):
+            self.cell_type(nf, tf, resize=("1", "1", "1"))
+
+    def test_volume_far_from_origin(self):
+        """Positions relative to a node: a cell 10^6 away keeps its volume."""
+        from oif import geometry
+        nodes = np.loadtxt(oif.mesh_files("sphere642")[0]) * 3.0
+        tris = self.cell_type(*oif.mesh_files("sphere642")).mesh.triangle_ids
+        v0 = geometry.volume(nodes, tris)
+        self.assertAlmostEqual(geometry.volume(nodes + 1e6, tris) / v0, 1.0, places=9)
+        self.assertEqual(str(geometry.volume(nodes, tris[:0])), "0.0")
+
 
 def re_line(path):
     return f"{path.replace('.', '[.]')}, line [0-9]+"

@@ -84,13 +84,113 @@ class TestSeeding(unittest.TestCase):
             oif.seed_cells(system, rbc, haematocrit=0.8, boundaries=walls, seed=1)
         # below the packing bound but too crowded for random placement of big spheres
         big = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(4.4, 4.4, 4.4))
-        with self.assertRaisesRegex(SeedingError, r"could not place cell \d+ of 12 in 200 random tries; placed \d+"):
-            oif.seed_cells(system, big, counts=12, boundaries=walls, seed=1, max_attempts=200, create=False)
+        # a sphere of diameter 8.8 breaks the half-box rule along a periodic z of 12
+        with self.assertRaisesRegex(ValueError, r"cell type 0 spans at least 8\.\d+ in any orientation.*"
+                                                r"half the periodic box length 12 along z"):
+            oif.seed_cells(system, big, counts=1, boundaries=walls, seed=1, create=False)
+        system.periodicity = [True, True, False]  # the walls bound z anyway
+        with self.assertRaisesRegex(SeedingError, r"could not place cell \d+ of 9 in 200 random tries; placed \d+"):
+            oif.seed_cells(system, big, counts=9, boundaries=walls, seed=1, max_attempts=200, create=False)
+        # more cell volume than 0.6 of the fluid: refused at once, as for a haematocrit
+        with self.assertRaisesRegex(SeedingError, r"12 cells of total volume \d+ cannot be placed at random in "
+                                                  r"the available volume 5760"):
+            oif.seed_cells(system, big, counts=12, boundaries=walls, seed=1, create=False)
+        system.periodicity = [True, True, True]
         with self.assertRaisesRegex(TypeError, "exactly one of 'counts' and 'haematocrit'"):
             oif.seed_cells(system, rbc, boundaries=walls)
         with self.assertRaisesRegex(ValueError, "'haematocrit' must be in"):
             oif.seed_cells(system, rbc, haematocrit=1.5)
         self.assertEqual(len(system.part), 0)  # nothing created on failure
+
+    def test_existing_particles_are_obstacles(self):
+        """Cells already in the system (and any other particle) count: new
+        nodes keep `gap` from them, no new cell lands inside an old one."""
+        system = lbmd.System(box_l=[16.0, 16.0, 16.0])
+        system.time_step = 0.1
+        ct = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(3.0, 3.0, 3.0))
+        old = oif.OifCell(cell_type=ct, particle_type=1, origin=[8, 8, 8])
+        tracer = system.part.add(pos=[1.0, 1.0, 1.0], type=2)
+        cells = oif.seed_cells(system, ct, counts=4, seed=1, max_attempts=2000)
+        gap = 1.2 * ct.mesh.max_edge_length()
+        box = np.array([16.0, 16.0, 16.0])
+        obstacles = np.vstack([old.mesh.positions(), tracer.pos[None, :]])
+        for c in cells:
+            d = c.mesh.positions()[:, None, :] - obstacles[None, :, :]
+            d -= box * np.round(d / box)
+            self.assertGreaterEqual(np.linalg.norm(d, axis=2).min(), gap - 1e-9)
+        # a small cell is not put inside a big existing one (no node near the big one's nodes)
+        system2 = lbmd.System(box_l=[30.0, 30.0, 30.0])
+        big = oif.OifCellType(*oif.mesh_files("sphere162"), system=system2, resize=(7.0, 7.0, 7.0))
+        small = oif.OifCellType(*oif.mesh_files("sphere162"), system=system2, resize=(1.0, 1.0, 1.0))
+        host = oif.OifCell(cell_type=big, particle_type=0, origin=[15, 15, 15])
+        placed = oif.seed_cells(system2, small, counts=6, seed=3, region=([5, 5, 5], [25, 25, 25]),
+                                create=False)
+        gap = 1.2 * big.mesh.max_edge_length()  # the host's long edges set the gap to it
+        for _, origin, _ in placed:
+            self.assertGreater(np.linalg.norm(origin - host.get_origin()), 7.0 + gap)
+
+    def test_bad_arguments_create_nothing(self):
+        system, walls, rbc, sphere = self.make()
+        other = lbmd.System(box_l=[L, L, H])
+        foreign = oif.OifCellType(*oif.mesh_files("rbc162"), system=other, resize=(R, R, R))
+        cases = [
+            (TypeError, "'particle_types'", dict(counts=[1, 1], particle_types=[0, 1.5])),
+            (ValueError, "'particle_types'", dict(counts=[1, 1], particle_types=[0, -1])),
+            (ValueError, "'particle_types' needs 2", dict(counts=[1, 1], particle_types=[0])),
+            (TypeError, "'counts'", dict(counts=2.7)),
+            (TypeError, "'counts'", dict(counts=[1, 2.0])),
+            (ValueError, "'gap'", dict(counts=1, gap=float("nan"))),
+            (ValueError, "'gap'", dict(counts=1, gap=-1.0)),
+            (ValueError, "'margin'", dict(counts=1, margin=float("nan"))),
+            (ValueError, "'margin'", dict(counts=1, margin=-0.5)),
+            (ValueError, "'haematocrit'", dict(haematocrit="0.1")),
+            (ValueError, "'haematocrit'", dict(haematocrit=float("nan"))),
+            (ValueError, "'fractions'", dict(haematocrit=0.05, fractions=[float("nan"), 1.0])),
+            (TypeError, "'seed'", dict(counts=1, seed=-1)),
+            (TypeError, "'seed'", dict(counts=1, seed=1.5)),
+            (TypeError, "'max_attempts'", dict(counts=1, max_attempts=0)),
+            (ValueError, "'region'", dict(counts=1, region=[0, 0, 0])),
+            (ValueError, "'region'", dict(counts=1, region=([0, 0, 0], [1, 1]))),
+            (ValueError, "'region'", dict(counts=1, region=([0, 0, 0], [np.nan, 1, 1]))),
+            (TypeError, "'boundaries'", dict(counts=1, boundaries=[walls[0], "wall"])),
+            (TypeError, "'exclusion_neighbours'", dict(counts=1, exclusion_neighbours=-1)),
+            (SeedingError, "cannot be placed", dict(counts=10**9)),  # fails fast, no huge list
+        ]
+        for exc, pattern, kwargs in cases:
+            with self.subTest(kwargs=kwargs):
+                with self.assertRaisesRegex(exc, pattern):
+                    oif.seed_cells(system, [rbc, sphere] if "particle_types" in kwargs or
+                                   isinstance(kwargs.get("counts"), list) or "fractions" in kwargs else rbc,
+                                   **kwargs)
+        with self.assertRaisesRegex(TypeError, "'system' must be an lbmd.System"):
+            oif.seed_cells(None, rbc, counts=1)
+        with self.assertRaisesRegex(ValueError, "cell type 1 belongs to another lbmd.System"):
+            oif.seed_cells(system, [rbc, foreign], counts=[1, 1])
+        self.assertEqual(len(system.part), 0)
+        self.assertEqual(len(other.part), 0)
+        # a single shape is taken as a list of one
+        cells = oif.seed_cells(system, rbc, counts=1, boundaries=walls[0], seed=2)
+        self.assertGreaterEqual(cells[0].mesh.positions()[:, 2].min(), WALL)
+
+    def test_failure_midway_removes_created_cells(self):
+        from unittest import mock
+        system, walls, rbc, sphere = self.make()
+        keep = oif.OifCell(cell_type=rbc, particle_type=0, origin=[2, 2, 6])
+        n_before = len(system.part)
+        real = oif.OifCell._add_bonds
+        calls = []
+
+        def failing(cell, *args):
+            calls.append(1)
+            if len(calls) == 3:
+                raise RuntimeError("engine failure")
+            return real(cell, *args)
+        with mock.patch.object(oif.OifCell, "_add_bonds", failing):
+            with self.assertRaisesRegex(RuntimeError, "engine failure"):
+                oif.seed_cells(system, rbc, counts=4, boundaries=walls, seed=5)
+        self.assertEqual(len(system.part), n_before)
+        np.testing.assert_array_equal(np.unique(system.part.all().mol_id), [keep.cell_id])
+        self.assertAlmostEqual(keep.volume(), rbc.volume0, places=9)
 
 
 if __name__ == "__main__":

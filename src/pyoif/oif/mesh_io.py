@@ -47,32 +47,93 @@ def _where(path, line):
 def _read_table(path, ncols, kind, what):
     """(values, line_numbers) of a whitespace table with ncols columns;
     blank lines and '#' comments are skipped."""
-    if not isinstance(path, (str, os.PathLike)):
-        raise TypeError(f"mesh input: file name must be a string, got {type(path).__name__}")
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
+        raise TypeError(f"mesh input: {what} file name must be a string, got {type(path).__name__}")
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise ValueError(f"mesh input: {what} file '{path}' is a directory, not a file")
     if not os.path.isfile(path):
         raise ValueError(f"mesh input: {what} file '{path}' does not exist")
     rows, lines = [], []
-    with open(path, "r") as f:
-        for lineno, raw in enumerate(f, start=1):
-            text = raw.split("#", 1)[0].strip()
-            if not text:
-                continue
-            fields = text.split()
-            if len(fields) != ncols:
-                raise ValueError(f"{_where(path, lineno)}: expected {ncols} {what} values, "
-                                 f"got {len(fields)}: {raw.strip()!r}")
-            try:
-                row = [kind(x) for x in fields]
-            except ValueError:
-                raise ValueError(f"{_where(path, lineno)}: {what} values must be "
-                                 f"{'integers' if kind is int else 'numbers'}: {raw.strip()!r}") from None
-            rows.append(row)
-            lines.append(lineno)
+    lineno = 0
+    try:
+        with open(path, "r", encoding="utf-8") as f:
+            for lineno, raw in enumerate(f, start=1):
+                text = raw.split("#", 1)[0].strip()
+                if not text:
+                    continue
+                fields = text.split()
+                if len(fields) != ncols:
+                    raise ValueError(f"{_where(path, lineno)}: expected {ncols} {what} values, "
+                                     f"got {len(fields)}: {raw.strip()!r}")
+                try:
+                    row = [kind(x) for x in fields]
+                except ValueError:
+                    raise ValueError(f"{_where(path, lineno)}: {what} values must be "
+                                     f"{'integers' if kind is int else 'numbers'}: {raw.strip()!r}") from None
+                if kind is int and any(abs(x) > 2**31 - 1 for x in row):
+                    # node indices are int32 in the engine; a larger one is certainly wrong
+                    raise ValueError(f"{_where(path, lineno)}: {what} value out of range: {raw.strip()!r}")
+                rows.append(row)
+                lines.append(lineno)
+    except UnicodeDecodeError:
+        # Python decodes in blocks, so find the offending line from the bytes
+        raise ValueError(f"{_where(path, _first_undecodable_line(path))}: not UTF-8 text; {what} "
+                         f"files are plain text tables") from None
+    except OSError as e:
+        raise ValueError(f"mesh input: cannot read {what} file '{path}': {e.strerror or e}") from None
     if not rows:
         raise ValueError(f"mesh input: {what} file '{path}' contains no data")
     dtype = np.int64 if kind is int else float
-    return np.array(rows, dtype=dtype), np.array(lines)
+    try:
+        return np.array(rows, dtype=dtype), np.array(lines)
+    except OverflowError:  # pragma: no cover - values are range-checked above
+        raise ValueError(f"mesh input: {what} file '{path}' has a value out of range") from None
+
+
+def _first_undecodable_line(path):
+    with open(path, "rb") as f:
+        for lineno, raw in enumerate(f, start=1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError:
+                return lineno
+    return 1  # pragma: no cover - only called after a decoding error
+
+
+def from_arrays(nodes, triangles):
+    """MeshData of user arrays, checked for shape, finiteness and integer
+    indices (rows named in messages; the mesh checks come after)."""
+    try:
+        nodes = np.asarray(nodes, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError("Mesh.from_arrays: 'nodes' must be an N x 3 array of numbers") from None
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or len(nodes) == 0:
+        raise ValueError(f"Mesh.from_arrays: 'nodes' must be an N x 3 array (x, y, z per row), "
+                         f"got shape {nodes.shape}")
+    bad = np.nonzero(~np.all(np.isfinite(nodes), axis=1))[0]
+    if bad.size:
+        raise ValueError(f"Mesh.from_arrays: node {bad[0]} (row {bad[0]} of 'nodes') has non-finite "
+                         f"coordinates {nodes[bad[0]].tolist()}")
+    try:
+        tris = np.asarray(triangles)
+    except ValueError:  # ragged nested lists
+        raise ValueError("Mesh.from_arrays: 'triangles' must be an M x 3 array of node indices "
+                         "(every row three indices)") from None
+    if tris.dtype == object or tris.ndim != 2 or tris.shape[1] != 3:
+        raise ValueError(f"Mesh.from_arrays: 'triangles' must be an M x 3 array of node indices, got "
+                         f"{'a ragged list' if tris.dtype == object else f'shape {tris.shape}'}")
+    if tris.dtype == bool or not (np.issubdtype(tris.dtype, np.integer) or np.issubdtype(tris.dtype, np.floating)):
+        raise TypeError(f"Mesh.from_arrays: 'triangles' must hold integer node indices, got dtype {tris.dtype}")
+    if np.issubdtype(tris.dtype, np.floating):
+        # np.loadtxt gives floats; accept them only when they are whole numbers
+        bad = np.nonzero(~np.all(np.isfinite(tris) & (tris == np.round(tris)), axis=1))[0]
+        if bad.size:
+            raise ValueError(f"Mesh.from_arrays: triangle {bad[0]} (row {bad[0]} of 'triangles') has "
+                             f"non-integer node indices {tris[bad[0]].tolist()}")
+    if tris.size and np.abs(tris).max() > 2**62:
+        raise ValueError("Mesh.from_arrays: 'triangles' has node indices out of range")
+    return MeshData(nodes, tris.astype(np.int64))
 
 
 def read_nodes(path):
@@ -110,6 +171,8 @@ def _read_with_meshio(path):
     except ImportError:  # pragma: no cover - meshio is a dependency
         raise ValueError(f"mesh input: reading '{path}' needs meshio (Debian package python3-meshio)") from None
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise ValueError(f"mesh input: mesh file '{path}' is a directory, not a file")
     if not os.path.isfile(path):
         raise ValueError(f"mesh input: mesh file '{path}' does not exist")
     try:
@@ -122,6 +185,10 @@ def _read_with_meshio(path):
     points = np.asarray(m.points, dtype=float)
     if points.shape[1] == 2:
         points = np.hstack([points, np.zeros((len(points), 1))])
+    bad = np.nonzero(~np.all(np.isfinite(points), axis=1))[0]
+    if bad.size:  # before merging: NaN keys would merge into nonsense
+        raise ValueError(f"mesh input: '{path}': point {bad[0]} has non-finite coordinates "
+                         f"{points[bad[0]].tolist()}; node coordinates must be finite")
     triangles = np.vstack(tris).astype(np.int64)
     # merge coincident points (STL stores every triangle's corners separately)
     scale = np.ptp(points, axis=0).max() or 1.0
@@ -331,14 +398,22 @@ def outward(triangles):
 def signed_volume(nodes, triangles):
     """Volume enclosed by triangles whose normals (B - A) x (C - A) point
     outward (negative for PyOIF's inward order): divergence theorem,
-    V = 1/6 sum A . (B x C)."""
-    a, b, c = nodes[triangles[:, 0]], nodes[triangles[:, 1]], nodes[triangles[:, 2]]
-    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+    V = 1/6 sum A . (B x C), with positions relative to one node so that
+    a mesh far from the origin keeps its precision."""
+    if len(triangles) == 0:
+        return 0.0
+    ref = nodes[triangles[0, 0]]
+    a, b, c = (nodes[triangles[:, k]] - ref for k in range(3))
+    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0) + 0.0  # + 0.0: no -0.0
 
 
-def write_nodes(path, nodes):
-    np.savetxt(path, nodes, fmt="%.15g")
+def write_nodes(path, nodes, owner="mesh output"):
+    """PyOIF's nodes.dat format (x y z per line); missing folders are created."""
+    from .vtk import write_text, format_rows
+    write_text(path, format_rows(np.asarray(nodes, dtype=float)), owner)
 
 
-def write_triangles(path, triangles):
-    np.savetxt(path, triangles, fmt="%d")
+def write_triangles(path, triangles, owner="mesh output"):
+    """PyOIF's triangles.dat format (three node indices per line)."""
+    from .vtk import write_text, format_rows
+    write_text(path, format_rows(np.asarray(triangles, dtype=np.int64), integer=True), owner)

@@ -15,6 +15,7 @@ pointing into the cell; the engine's triangle bonds get them outward.
 import itertools
 import numbers
 import os
+import weakref
 
 import numpy as np
 
@@ -44,7 +45,11 @@ def _real(owner, name, value, check=None):
 
 def _vec3(owner, name, value, positive=False):
     try:
-        arr = np.asarray(value, dtype=float)
+        raw = np.asarray(value)
+        # strings would convert silently ('1' -> 1.0): accept real numbers only
+        if raw.dtype.kind not in "iuf":
+            raise TypeError
+        arr = raw.astype(float)
     except (TypeError, ValueError):
         raise TypeError(f"{owner}: parameter '{name}' must be 3 numbers, got {value!r}") from None
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
@@ -57,6 +62,68 @@ def _vec3(owner, name, value, positive=False):
 def _check_system(owner, system):
     if not isinstance(system, lbmd.System):
         raise TypeError(f"{owner}: parameter 'system' must be an lbmd.System, got {type(system).__name__}")
+
+
+#: every complete OifCell (weakly held), so that seeding can avoid the cells already there
+_CELLS = weakref.WeakSet()
+
+
+def live_cells(system):
+    """The OifCells of `system` whose particles are all still theirs."""
+    out = []
+    for c in list(_CELLS):
+        if c.system is system:
+            try:
+                c.mesh._live_parts()
+            except RuntimeError:
+                continue
+            out.append(c)
+    return sorted(out, key=lambda c: c.cell_id)  # reproducible order
+
+
+#: particle types, mol_ids and ids are int32 in the engine
+_INT32_MAX = 2**31 - 1
+
+
+def _is_int(value):
+    return isinstance(value, (numbers.Integral, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _exclusion_rings(owner, exclusion_neighbours):
+    """Number of edge rings excluded from self-cell contacts."""
+    if isinstance(exclusion_neighbours, (bool, np.bool_)):
+        return DEFAULT_EXCLUSION_RINGS if exclusion_neighbours else 0
+    if _is_int(exclusion_neighbours) and exclusion_neighbours >= 0:
+        return int(exclusion_neighbours)
+    raise TypeError(f"{owner}: parameter 'exclusion_neighbours' must be True, False or a "
+                    f"number of edge rings >= 0, got {exclusion_neighbours!r}")
+
+
+def _node_ids(owner, name, ids, n):
+    """A list of mesh node ids in 0..n-1 (TypeError for a non-list)."""
+    if isinstance(ids, (str, bytes)) or not isinstance(ids, (list, tuple, range, np.ndarray)):
+        raise TypeError(f"{owner}: parameter '{name}' must be a list of node ids, got {ids!r}")
+    ids = list(np.asarray(ids).ravel()) if isinstance(ids, np.ndarray) else list(ids)
+    for i in ids:
+        if not _is_int(i) or not 0 <= i < n:
+            raise ValueError(f"{owner}: parameter '{name}' must hold node ids in 0..{n - 1}, got {i!r}")
+    return [int(i) for i in ids]
+
+
+def check_periodic_extent(owner, system, pos, what="the cell"):
+    """Raise ValueError when nodes span half a periodic box length or more:
+    the engine evaluates membrane bonds with the nearest periodic image of
+    each partner, so such a cell would get wrong forces without any error."""
+    box = np.asarray(system.box_l, dtype=float)
+    periodic = np.asarray(system.periodicity, dtype=bool)
+    extent = pos.max(axis=0) - pos.min(axis=0)
+    for axis in range(3):
+        if periodic[axis] and extent[axis] >= 0.5 * box[axis]:
+            xyz = "xyz"[axis]
+            raise ValueError(f"{owner}: {what} spans {extent[axis]:.6g} along {xyz}, not less than half the "
+                             f"periodic box length {box[axis]:.6g} (box_l[{axis}]); membrane bonds use the "
+                             f"nearest periodic image, so its forces would be wrong. Use a longer box along "
+                             f"{xyz}, a non-periodic {xyz} axis, or a smaller cell")
 
 
 # ---------------------------------------------------------------------------
@@ -228,8 +295,13 @@ class _Topology:
                 adj = self.adjacency()
                 reach = identity(self.n_nodes, dtype=np.int32, format="csr")
                 for _ in range(rings):
-                    reach = reach + reach @ adj
-                    reach.data[:] = 1
+                    grown = reach + reach @ adj
+                    grown.data[:] = 1
+                    # reach only grows: an unchanged count means every node reaches the
+                    # whole (connected) mesh, so rings beyond the graph diameter cost nothing
+                    if grown.nnz == reach.nnz:
+                        break
+                    reach = grown
                 coo = reach.tocoo()
                 mask = coo.row < coo.col
                 pairs = np.stack([coo.row[mask], coo.col[mask]], axis=1).astype(np.int64)
@@ -253,10 +325,22 @@ class Mesh:
     def __init__(self, nodes_file=None, triangles_file=None, system=None, resize=(1.0, 1.0, 1.0),
                  particle_type=-1, particle_mass=1.0, normal=False, check_orientation=True):
         _check_system("Mesh", system)
+        for name, f in (("nodes_file", nodes_file), ("triangles_file", triangles_file)):
+            if f is not None and (not isinstance(f, (str, os.PathLike)) or isinstance(f, bytes)):
+                raise TypeError(f"Mesh: parameter '{name}' must be a file name (string or path), got "
+                                f"{type(f).__name__}; for arrays use oif.Mesh.from_arrays")
+        # PyOIF's Mesh kept these for its cells; -1 means "not set"
+        if not _is_int(particle_type) or not -1 <= particle_type <= _INT32_MAX:
+            raise ValueError(f"Mesh: parameter 'particle_type' must be an integer >= 0 (or -1, not set), "
+                             f"got {particle_type!r}")
+        self.particle_type = int(particle_type)
+        self.particle_mass = _real("Mesh", "particle_mass", particle_mass, "pos")
         self.system = system
         self.normal = bool(normal)
         self.nodes_file = None if nodes_file is None else os.fspath(nodes_file)
         self.triangles_file = None if triangles_file in (None, "") else os.fspath(triangles_file)
+        self._mol_id = None      # cell meshes: the mol_id all their particles must have
+        self._owner = "Mesh"     # how errors name this mesh (a cell's mesh: the cell)
         self._nodes = None       # relaxed node positions (cell type) or None (cell)
         self._parts = None       # ParticleSlice (cell)
         self.part_ids = None
@@ -282,7 +366,7 @@ class Mesh:
     def from_arrays(cls, system, nodes, triangles, check_orientation=True):
         """A mesh from arrays (nodes N x 3, triangles M x 3), checked like a file."""
         m = cls(system=system)
-        data = mesh_io.MeshData(nodes, triangles)
+        data = mesh_io.from_arrays(nodes, triangles)
         mesh_io.check_mesh(data, check_orientation=check_orientation)
         m._set_arrays(data.nodes, _Topology(data.triangles, len(data.nodes)))
         m.flipped_triangles = data.flipped
@@ -290,48 +374,90 @@ class Mesh:
 
     def copy(self, origin=None, particle_type=-1, particle_mass=1.0, rotate=None, mol_id=None):
         """A cell's mesh: particles at the (rotated, moved) nodes of this one."""
+        return self._cell_mesh(self._placed_positions(origin, rotate), particle_type, particle_mass,
+                               particle_type if mol_id is None else mol_id)
+
+    def _placed_positions(self, origin=None, rotate=None):
+        """This (relaxed) mesh's nodes rotated by `rotate`, then moved by `origin`."""
+        if self._nodes is None:
+            self._need_topology()
+            raise ValueError(f"{self._owner}: only a cell type's relaxed mesh can be copied")
         pos = self._nodes
         if rotate is not None:
             pos = pos @ geo.rotation_matrix(_vec3("Mesh.copy", "rotate", rotate)).T
             pos = np.where(np.abs(pos) < small_epsilon, 0.0, pos)  # as PyOIF's discard_epsilon
         if origin is not None:
             pos = pos + _vec3("Mesh.copy", "origin", origin)
+        return pos
+
+    def _cell_mesh(self, pos, particle_type, particle_mass, mol_id):
+        """A mesh sharing this one's topology, with new particles at pos."""
         mesh = Mesh(system=self.system)
         mesh.normal = self.normal
         mesh.nodes_file, mesh.triangles_file = self.nodes_file, self.triangles_file
         mesh._topo = self._topo
         mesh.ids_extremal_points = list(self.ids_extremal_points)
         mesh._parts = self.system.part.add(pos=pos, type=int(particle_type), mass=float(particle_mass),
-                                           mol_id=int(particle_type if mol_id is None else mol_id))
+                                           mol_id=int(mol_id))
         mesh.part_ids = mesh._parts.id
+        mesh._mol_id = int(mol_id)
         return mesh
+
+    def _need_topology(self):
+        if self._topo is None:
+            raise ValueError(f"{self._owner}: this mesh has no nodes and triangles (it was created without "
+                             f"nodes_file); give nodes_file and triangles_file, or use oif.Mesh.from_arrays")
+        return self._topo
+
+    def _live_parts(self, check_mol_id=True):
+        """The cell's particles, after checking (one bulk read of mol_id) that
+        they all still exist and (check_mol_id) still belong to this cell:
+        after system.part.clear() or a removal the ids may be gone or reused
+        by other particles, and computing on those would be silently wrong."""
+        parts = self._parts
+        try:
+            mol = parts.mol_id
+        except (ValueError, IndexError) as e:
+            if "does not exist" not in str(e):
+                raise
+            raise RuntimeError(f"{self._owner}: its particles were removed or replaced ({e}); this cell object is "
+                               f"stale, create a new cell") from None
+        if check_mol_id and self._mol_id is not None:
+            bad = np.nonzero(mol != self._mol_id)[0]
+            if bad.size:
+                raise RuntimeError(f"{self._owner}: its particles were removed or replaced (particle "
+                                   f"{int(self.part_ids[bad[0]])} has mol_id {int(mol[bad[0]])}, not "
+                                   f"{self._mol_id}); this cell object is stale, create a new cell")
+        return parts
 
     # -- arrays ---------------------------------------------------------------
     @property
     def triangle_ids(self):
-        return self._topo.triangles
+        return self._need_topology().triangles
 
     @property
     def edge_ids(self):
-        return self._topo.edges
+        return self._need_topology().edges
 
     @property
     def angle_ids(self):
-        return self._topo.angles
+        return self._need_topology().angles
 
     def positions(self):
         """Node positions (N x 3): unfolded particle positions for a cell."""
         if self._parts is not None:
-            return self._parts.pos
+            return self._live_parts().pos
+        self._need_topology()
         return self._nodes.copy()
 
     # -- PyOIF view lists -------------------------------------------------------
     def _point_list(self):
         if "points" not in self._views:
-            nb = self._topo.neighbour_lists
+            nb = self._need_topology().neighbour_lists
             if self._parts is None:
                 pts = [FixedPoint(p, i) for i, p in enumerate(self._nodes)]
             else:
+                self._live_parts()
                 pts = [PartPoint(ParticleHandle(self.system, int(pid)), i, int(pid))
                        for i, pid in enumerate(self.part_ids)]
             for p in pts:
@@ -414,7 +540,7 @@ class Mesh:
         return getattr(self, "_triangle_override", self.triangle_ids)
 
     def get_n_nodes(self):
-        return self._topo.n_nodes
+        return self._need_topology().n_nodes
 
     def get_n_triangles(self):
         return len(self.triangle_ids)
@@ -469,6 +595,10 @@ class Mesh:
 
     def total_fluid_force(self, lbfluid, friction):
         """Sum over nodes of friction (u - v): the fluid's force on the cell."""
+        if not callable(getattr(lbfluid, "get_interpolated_velocity", None)):
+            raise TypeError(f"Mesh.total_fluid_force: parameter 'lbfluid' must be a lattice-Boltzmann fluid "
+                            f"(with get_interpolated_velocity), got {type(lbfluid).__name__}")
+        friction = _real("Mesh.total_fluid_force", "friction", friction, "nonneg")
         pos = self.positions()
         vel = self._parts.v if self._parts is not None else np.zeros_like(pos)
         u = np.array([lbfluid.get_interpolated_velocity(p) for p in pos])
@@ -488,16 +618,14 @@ class Mesh:
         """Write the (checked, consistently oriented) triangles in PyOIF's format."""
         if triangles_file is None:
             raise ValueError("Mesh.output_mesh_triangles: parameter 'triangles_file' is required")
-        if _vtk._is_writer():
-            mesh_io.write_triangles(triangles_file, self.triangle_ids)
+        mesh_io.write_triangles(triangles_file, self.triangle_ids, "Mesh.output_mesh_triangles")
         return 0
 
     def output_mesh_nodes(self, nodes_file=None):
         """Write the node positions (relaxed mesh, or a cell's current ones) in PyOIF's format."""
         if nodes_file is None:
             raise ValueError("Mesh.output_mesh_nodes: parameter 'nodes_file' is required")
-        if _vtk._is_writer():
-            mesh_io.write_nodes(nodes_file, self.positions())
+        mesh_io.write_nodes(nodes_file, self.positions(), "Mesh.output_mesh_nodes")
         return 0
 
     def mirror(self, mirror_x=0, mirror_y=0, mirror_z=0, out_file_name=""):
@@ -511,8 +639,8 @@ class Mesh:
             raise ValueError("Mesh.mirror: mirror along one axis only")
         pos = self.positions()
         pos[:, np.array(flags, dtype=bool)] *= -1.0
-        if sum(flags) == 1 and _vtk._is_writer():
-            mesh_io.write_nodes(out_file_name, pos)
+        if sum(flags) == 1:
+            mesh_io.write_nodes(out_file_name, pos, "Mesh.mirror")
         return 0
 
 
@@ -540,10 +668,12 @@ class OifCellType:
                  check_orientation=True):
         owner = "OifCellType"
         _check_system(owner, system)
-        if nodes_file in ("", None):
+        for name, f in (("nodes_file", nodes_file), ("triangles_file", triangles_file)):
+            if f is not None and (not isinstance(f, (str, os.PathLike)) or isinstance(f, bytes)):
+                raise TypeError(f"{owner}: parameter '{name}' must be a file name (string or path), got "
+                                f"{type(f).__name__}; for arrays build the files or use oif.Mesh.from_arrays")
+        if nodes_file is None or (isinstance(nodes_file, str) and nodes_file == ""):
             raise ValueError(f"{owner}: parameter 'nodes_file' is required")
-        if not isinstance(nodes_file, (str, os.PathLike)) or not isinstance(triangles_file, (str, os.PathLike, type(None))):
-            raise TypeError(f"{owner}: file names must be strings")
         if triangles_file in ("", None) and str(nodes_file).endswith(".dat"):
             raise ValueError(f"{owner}: parameter 'triangles_file' is required with a nodes.dat file")
         for name, value in (("normal", normal), ("check_orientation", check_orientation)):
@@ -632,9 +762,15 @@ class OifCellType:
         visc = _real("suggest_LBgamma", "visc", visc, "pos")
         dens = _real("suggest_LBgamma", "dens", dens, "pos")
         n = self.mesh.get_n_nodes()
-        return (393.0 / n) * np.sqrt(self.surface0 / 201.0619) * (
+        gamma = (393.0 / n) * np.sqrt(self.surface0 / 201.0619) * (
             (5.6 - 1.82) / (5.853658537 - 1.5) * (visc - 1.5)
             + (10 - 1.82) / (6 - 1.025) * (dens - 1.025) + 1.82)
+        if not gamma > 0:
+            # the formula is a linear fit; far below its calibration (visc 1.5, dens 1.025) it goes negative
+            raise ValueError(f"suggest_LBgamma: visc={visc!r} and dens={dens!r} are outside the range of the "
+                             f"calibration (visc about 1.5 to 5.9, dens about 1 to 6, lattice units): the "
+                             f"formula gives {gamma:.4g} <= 0; choose the friction yourself")
+        return float(gamma)
 
     def exclusion_pairs(self, rings=DEFAULT_EXCLUSION_RINGS, distance=None):
         """Node pairs (i < j, mesh ids) excluded from self-cell contacts: up to
@@ -674,39 +810,58 @@ class OifCell:
     def __init__(self, cell_type=None, origin=None, particle_type=None, particle_mass=1.0, rotate=None,
                  exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=()):
         owner = "OifCell"
+        # every argument is checked before anything is added to the system
         if not isinstance(cell_type, OifCellType):
             raise TypeError(f"{owner}: parameter 'cell_type' must be an OifCellType, got {type(cell_type).__name__}")
         if origin is None:
             raise TypeError(f"{owner}: missing required parameter 'origin'")
         origin = _vec3(owner, "origin", origin)
-        if isinstance(particle_type, bool) or not isinstance(particle_type, (int, np.integer)) or particle_type < 0:
-            raise TypeError(f"{owner}: parameter 'particle_type' must be an integer >= 0, got {particle_type!r}")
+        if not _is_int(particle_type) or not 0 <= particle_type <= _INT32_MAX:
+            raise TypeError(f"{owner}: parameter 'particle_type' must be an integer in 0..{_INT32_MAX}, "
+                            f"got {particle_type!r}")
         particle_mass = _real(owner, "particle_mass", particle_mass, "pos")
         if rotate is not None:
             rotate = _vec3(owner, "rotate", rotate)
-        if isinstance(exclusion_neighbours, (bool, np.bool_)):
-            rings = DEFAULT_EXCLUSION_RINGS if exclusion_neighbours else 0
-        elif isinstance(exclusion_neighbours, (int, np.integer)) and exclusion_neighbours >= 0:
-            rings = int(exclusion_neighbours)
-        else:
-            raise TypeError(f"{owner}: parameter 'exclusion_neighbours' must be True, False or a "
-                            f"number of edge rings >= 0, got {exclusion_neighbours!r}")
+        rings = _exclusion_rings(owner, exclusion_neighbours)
         if self_cell_cutoff is not None:
             self_cell_cutoff = _real(owner, "self_cell_cutoff", self_cell_cutoff, "nonneg")
+        rotation_ids = _node_ids(owner, "rotation_ids", rotation_ids, cell_type.mesh.get_n_nodes())
 
         system = cell_type.system
+        # cell ids never repeat (a stale cell object is recognised by its mol_id);
+        # the counter advances only once the cell is complete
+        cell_id = int(system.max_oif_objects)
+        if cell_id > _INT32_MAX:
+            raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
+        pos = cell_type.mesh._placed_positions(origin, rotate)
+        check_periodic_extent(owner, system, pos)
         self.cell_type = cell_type
         self.system = system
-        self.cell_id = int(system.max_oif_objects)
-        system.max_oif_objects = self.cell_id + 1
+        self.cell_id = cell_id
         self.particle_type = int(particle_type)
         self.particle_mass = particle_mass
         self.origin = origin
         self.rotate = rotate
         self.exclusion_neighbours = exclusion_neighbours
         self.self_cell_cutoff = self_cell_cutoff
-        self.mesh = cell_type.mesh.copy(origin=origin, particle_type=particle_type,
-                                        particle_mass=particle_mass, rotate=rotate, mol_id=self.cell_id)
+        self.mesh = cell_type.mesh._cell_mesh(pos, particle_type, particle_mass, cell_id)
+        self.mesh._owner = f"OifCell (cell_id {cell_id})"
+        try:
+            self._add_bonds(rings, self_cell_cutoff)
+            self.set_rotation(rotation_ids)
+        except BaseException:
+            # no half-built cell stays behind: removing the particles removes
+            # their bonds and exclusions too
+            try:
+                self.mesh._parts.remove()
+            except Exception:  # pragma: no cover - report the original error
+                pass
+            raise
+        system.max_oif_objects = cell_id + 1
+        _CELLS.add(self)
+
+    def _add_bonds(self, rings, self_cell_cutoff):
+        cell_type, system = self.cell_type, self.system
         ids = self.mesh.part_ids
         part = system.part
         if cell_type.local_force_interaction is not None:
@@ -730,13 +885,20 @@ class OifCell:
             else:  # engine without the bulk call
                 for a, b in pid_pairs.tolist():
                     core.add_exclusion(a, b)
-        self.set_rotation(list(rotation_ids))
 
     # -- particles ----------------------------------------------------------------
     @property
     def particles(self):
-        """The cell's particles (lbmd ParticleSlice; .pos, .v, .f in bulk)."""
-        return self.mesh._parts
+        """The cell's particles (lbmd ParticleSlice; .pos, .v, .f in bulk);
+        RuntimeError if any of them was removed. (Their mol_id is not
+        checked here: this is the low-level handle, e.g. to renumber cells;
+        the cell's own methods check it.)"""
+        return self.mesh._live_parts(check_mol_id=False)
+
+    @property
+    def _parts(self):
+        """The particles, checked to be all this cell's (mol_id == cell_id)."""
+        return self.mesh._live_parts()
 
     def get_n_nodes(self):
         return self.mesh.get_n_nodes()
@@ -755,7 +917,7 @@ class OifCell:
     def set_origin(self, new_origin=(0.0, 0.0, 0.0)):
         """Move the cell rigidly so that its mean node position is new_origin."""
         pos = self.mesh.positions()
-        self.particles.pos = pos - pos.mean(axis=0) + _vec3("OifCell.set_origin", "new_origin", new_origin)
+        self._parts.pos = pos - pos.mean(axis=0) + _vec3("OifCell.set_origin", "new_origin", new_origin)
 
     def get_approx_origin(self):
         """Mean of the six nodes extremal in x, y, z in the relaxed mesh (cheap centre)."""
@@ -765,20 +927,20 @@ class OifCell:
         return np.mod(self.get_origin(), self.system.box_l)
 
     def get_velocity(self):
-        return self.particles.v.mean(axis=0)
+        return self._parts.v.mean(axis=0)
 
     def set_velocity(self, new_velocity=(0.0, 0.0, 0.0)):
-        self.particles.v = _vec3("OifCell.set_velocity", "new_velocity", new_velocity)
+        self._parts.v = _vec3("OifCell.set_velocity", "new_velocity", new_velocity)
 
     def set_force(self, new_force=(0.0, 0.0, 0.0)):
         """Constant external force on every node."""
-        self.particles.ext_force = _vec3("OifCell.set_force", "new_force", new_force)
+        self._parts.ext_force = _vec3("OifCell.set_force", "new_force", new_force)
 
     def kill_motion(self):
-        self.particles.fix = [True, True, True]
+        self._parts.fix = [True, True, True]
 
     def unkill_motion(self):
-        self.particles.fix = [False, False, False]
+        self._parts.fix = [False, False, False]
 
     def pos_bounds(self):
         """[x_min, x_max, y_min, y_max, z_min, z_max] of the nodes."""
@@ -822,12 +984,8 @@ class OifCell:
     def set_rotation(self, ids=()):
         """Remember the current directions (from the centre) of nodes `ids`
         (default: the six extremal nodes) for get_rotation_angles()."""
-        ids = list(ids)
-        n = self.get_n_nodes()
-        for i in ids:
-            if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n:
-                raise ValueError(f"OifCell.set_rotation: ids must be node ids in 0..{n - 1}, got {i!r}")
-        self.rot_ids = [int(i) for i in ids] if ids else list(self.mesh.ids_extremal_points)
+        ids = _node_ids("OifCell.set_rotation", "ids", ids, self.get_n_nodes())
+        self.rot_ids = ids if ids else list(self.mesh.ids_extremal_points)
         pos = self.mesh.positions()
         self.rot_init_pos = pos[self.rot_ids] - pos.mean(axis=0)
 
@@ -864,16 +1022,50 @@ class OifCell:
         _vtk.write_triangles(file_name, pos - shift, self._vtk_triangles(), point_data)
 
     def append_point_data_to_vtk(self, file_name=None, data_name=None, data=None, first_append=None):
-        """Append per-node scalars to a file written by output_vtk_pos* (PyOIF)."""
+        """Append per-node scalars to a file written by output_vtk_pos* (PyOIF):
+        first_append=True starts the POINT_DATA section (the file must not have
+        one yet), False adds to the existing one."""
+        owner = "OifCell.append_point_data_to_vtk"
         if file_name is None or data is None or data_name is None or first_append is None:
-            raise ValueError("OifCell.append_point_data_to_vtk: parameters 'file_name', 'data_name', "
-                             "'data' and 'first_append' are required")
-        data = np.asarray(data, dtype=float)
+            raise ValueError(f"{owner}: parameters 'file_name', 'data_name', 'data' and 'first_append' "
+                             f"are required")
+        if not isinstance(first_append, (bool, np.bool_)) and first_append not in (0, 1):
+            raise TypeError(f"{owner}: parameter 'first_append' must be True or False, got {first_append!r}")
+        if not isinstance(data_name, str) or not data_name or any(c.isspace() for c in data_name):
+            raise ValueError(f"{owner}: parameter 'data_name' must be a non-empty string without spaces "
+                             f"(VTK names are single words), got {data_name!r}")
+        try:
+            data = np.asarray(data, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{owner}: parameter 'data' must be numbers") from None
         n = self.get_n_nodes()
         if data.shape != (n,):
-            raise ValueError(f"OifCell.append_point_data_to_vtk: 'data' must have {n} values, got shape {data.shape}")
+            raise ValueError(f"{owner}: 'data' must have {n} values, got shape {data.shape}")
+        if not isinstance(file_name, (str, os.PathLike)) or isinstance(file_name, bytes):
+            raise TypeError(f"{owner}: parameter 'file_name' must be a string, got {type(file_name).__name__}")
+        if not os.path.isfile(file_name):
+            raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not an existing VTK file; write it "
+                             f"first with output_vtk_pos or output_vtk_pos_folded")
         if not _vtk._is_writer():
             return
+        with open(file_name, "r") as f:
+            text = f.read()
+        # the file's own structure decides: a second POINT_DATA header, or
+        # scalars without one, make a file that VTK readers reject
+        header = [ln for ln in text.splitlines() if ln.startswith("POINT_DATA")]
+        points = [ln for ln in text.splitlines() if ln.startswith("POINTS")]
+        if not points or points[0].split()[1:2] != [str(n)]:
+            raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not a VTK file of this cell's {n} nodes "
+                             f"(its POINTS line: {points[0] if points else 'missing'})")
+        if first_append and header:
+            raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has a POINT_DATA section; pass "
+                             f"first_append=False to add to it")
+        if not first_append and not header:
+            raise ValueError(f"{owner}: '{os.fspath(file_name)}' has no POINT_DATA section yet; pass "
+                             f"first_append=True for the first data")
+        if any(ln.split()[1:2] == [data_name] for ln in text.splitlines()
+               if ln.startswith(("SCALARS", "VECTORS"))):
+            raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has data named '{data_name}'")
         with open(file_name, "a") as f:
             if first_append:
                 f.write(f"POINT_DATA {n}\n")
@@ -883,11 +1075,14 @@ class OifCell:
     def output_raw_data(self, file_name=None, data=None):
         if file_name is None or data is None:
             raise ValueError("OifCell.output_raw_data: parameters 'file_name' and 'data' are required")
-        data = np.asarray(data, dtype=float)
-        if len(data) != self.get_n_nodes():
-            raise ValueError(f"OifCell.output_raw_data: 'data' must have {self.get_n_nodes()} rows, got {len(data)}")
-        if _vtk._is_writer():
-            np.savetxt(file_name, data.reshape(len(data), -1), fmt="%.15g")
+        try:
+            data = np.asarray(data, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError("OifCell.output_raw_data: parameter 'data' must be numbers") from None
+        if data.ndim == 0 or len(data) != self.get_n_nodes():
+            raise ValueError(f"OifCell.output_raw_data: 'data' must have {self.get_n_nodes()} rows, got "
+                             f"shape {data.shape}")
+        _vtk.write_text(file_name, _vtk.format_rows(data), "OifCell.output_raw_data")
 
     def output_mesh_points(self, file_name=None):
         """Node positions relative to the cell's centre, PyOIF's nodes.dat format
@@ -896,8 +1091,7 @@ class OifCell:
         if file_name is None:
             raise ValueError("OifCell.output_mesh_points: parameter 'file_name' is required")
         pos = self.mesh.positions()
-        if _vtk._is_writer():
-            mesh_io.write_nodes(file_name, pos - pos.mean(axis=0))
+        mesh_io.write_nodes(file_name, pos - pos.mean(axis=0), "OifCell.output_mesh_points")
 
     output_mesh_nodes = output_mesh_points
 
@@ -909,11 +1103,12 @@ class OifCell:
         nodes, lines = mesh_io.read_nodes(file_name)
         if len(nodes) != self.get_n_nodes():
             raise ValueError(f"{file_name}: has {len(nodes)} nodes, the cell has {self.get_n_nodes()}")
-        self.particles.pos = nodes + self.get_origin()
+        self._parts.pos = nodes + self.get_origin()
 
     set_mesh_nodes = set_mesh_points
 
     def print_info(self):
+        self.mesh._live_parts()
         print("\nThe following OifCell was created: ")
         print("\t cell_id (mol_id): " + str(self.cell_id))
         print("\t particle_mass: " + custom_str(self.particle_mass))
@@ -931,6 +1126,7 @@ class OifCell:
         'stretching', 'bending', 'local_area', 'global_area', 'volume' (zeros
         where the modulus is off) and 'total' (their sum)."""
         ct = self.cell_type
+        self.mesh._live_parts()  # the engine's forces of reused ids would belong to other particles
         ids = self.mesh.part_ids
         n = len(ids)
         out = {}
@@ -958,7 +1154,10 @@ class OifCell:
         into raw_data_file; f_metric selects sums over nodes of |F|, returned
         as a list of 6 (0 if none selected)."""
         for name, flags in (("el_forces", el_forces), ("f_metric", f_metric)):
-            if len(flags) != 6 or any(f not in (0, 1) for f in flags):
+            if isinstance(flags, (str, bytes)) or not isinstance(flags, (list, tuple, np.ndarray)):
+                raise TypeError(f"OifCell.elastic_forces: '{name}' must be a list of 6 flags (0 or 1) in "
+                                f"the order (ks, kb, kal, kag, kv, total), got {flags!r}")
+            if len(flags) != 6 or any(np.ndim(f) != 0 or f not in (0, 1) for f in flags):
                 raise ValueError(f"OifCell.elastic_forces: '{name}' must be 6 flags of 0 or 1 in the "
                                  f"order (ks, kb, kal, kag, kv, total), got {flags!r}")
         names = ("stretching", "bending", "local_area", "global_area", "volume", "total")

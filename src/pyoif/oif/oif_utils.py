@@ -7,6 +7,8 @@ The mesh-wide, vectorised versions live in ``oif.geometry``; these take
 single points (lists or arrays of 3 numbers) as PyOIF's did.
 """
 import math
+import numbers
+import os
 
 import numpy as np
 
@@ -122,14 +124,43 @@ def oif_calc_volume_force(kv, pA, pB, pC, V0, V):
 # ---------------------------------------------------------------------------
 # VTK output of shapes (legacy ASCII polydata; ParaView opens it)
 # ---------------------------------------------------------------------------
-def _shape_value(shape, name):
-    value = getattr(shape, name)
-    return np.asarray(value, dtype=float) if np.ndim(value) else float(value)
+def _shape_value(owner, shape, name, kind):
+    """A shape's attribute, checked: kind 'vec' (3 finite numbers), 'dir'
+    (3 finite numbers, not all zero) or 'pos' (a finite number > 0)."""
+    if isinstance(shape, (str, bytes, os.PathLike)) or not hasattr(shape, name):
+        raise TypeError(f"{owner}: the shape argument must be a shape with '{name}' (e.g. "
+                        f"lbmd.shapes.{'Rhomboid' if owner.endswith('rhomboid') else 'Cylinder'}), "
+                        f"got {type(shape).__name__}")
+    return _checked(owner, name, getattr(shape, name), kind)
+
+
+def _checked(owner, name, value, kind):
+    if kind == "pos":
+        if (not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_))
+                or not np.isfinite(value) or value <= 0):
+            raise ValueError(f"{owner}: '{name}' must be a finite number > 0, got {value!r}")
+        return float(value)
+    if kind == "nonneg":
+        if (not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_))
+                or not np.isfinite(value) or value < 0):
+            raise ValueError(f"{owner}: '{name}' must be a finite number >= 0, got {value!r}")
+        return float(value)
+    raw = np.asarray(value)
+    if raw.dtype.kind not in "iuf" or raw.shape != (3,) or not np.all(np.isfinite(raw)):
+        raise ValueError(f"{owner}: '{name}' must be 3 finite numbers, got {value!r}")
+    arr = raw.astype(float)
+    if kind == "dir" and not np.any(arr != 0):
+        raise ValueError(f"{owner}: '{name}' must not be the zero vector (it is a direction)")
+    return arr
 
 
 def output_vtk_rhomboid(rhom_shape, out_file):
     """The 6 faces of a Rhomboid(corner, a, b, c) as quads."""
-    corner, a, b, c = (_shape_value(rhom_shape, k) for k in ("corner", "a", "b", "c"))
+    owner = "output_vtk_rhomboid"
+    corner = _shape_value(owner, rhom_shape, "corner", "vec")
+    a, b, c = (_shape_value(owner, rhom_shape, k, "dir") for k in ("a", "b", "c"))
+    if abs(np.dot(np.cross(a, b), c)) <= 1e-12 * np.linalg.norm(a) * np.linalg.norm(b) * np.linalg.norm(c):
+        raise ValueError(f"{owner}: edge vectors a, b, c are coplanar (the rhomboid has no volume)")
     pts = np.array([corner, corner + a, corner + a + b, corner + b,
                     corner + c, corner + a + c, corner + a + b + c, corner + b + c])
     quads = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [0, 4, 7, 3], [1, 2, 6, 5]]
@@ -148,11 +179,13 @@ def _perpendicular_basis(axis):
 def output_vtk_cylinder(cyl_shape, n, out_file):
     """A Cylinder(center, axis, radius, length) as n side quads and two n-gon
     caps; any axis direction (PyOIF supported only axes along z)."""
-    if not isinstance(n, (int, np.integer)) or n < 3:
-        raise ValueError(f"output_vtk_cylinder: parameter 'n' must be an integer >= 3, got {n!r}")
-    center = _shape_value(cyl_shape, "center")
-    axis, e1, e2 = _perpendicular_basis(_shape_value(cyl_shape, "axis"))
-    radius, length = _shape_value(cyl_shape, "radius"), _shape_value(cyl_shape, "length")
+    owner = "output_vtk_cylinder"
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
+        raise ValueError(f"{owner}: parameter 'n' must be an integer >= 3, got {n!r}")
+    center = _shape_value(owner, cyl_shape, "center", "vec")
+    axis, e1, e2 = _perpendicular_basis(_shape_value(owner, cyl_shape, "axis", "dir"))
+    radius = _shape_value(owner, cyl_shape, "radius", "pos")
+    length = _shape_value(owner, cyl_shape, "length", "pos")
     phi = 2.0 * np.pi * np.arange(n) / n
     ring = radius * (np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2)
     bottom = center - 0.5 * length * axis + ring
@@ -166,7 +199,14 @@ def output_vtk_cylinder(cyl_shape, n, out_file):
 
 def output_vtk_lines(lines, out_file):
     """Line segments, each row (x1, y1, z1, x2, y2, z2)."""
-    lines = np.asarray(lines, dtype=float).reshape(-1, 6)
+    try:
+        lines = np.asarray(lines, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("output_vtk_lines: 'lines' must be rows of 6 numbers (x1, y1, z1, x2, y2, z2)") from None
+    if lines.size % 6 or not np.all(np.isfinite(lines)):
+        raise ValueError(f"output_vtk_lines: 'lines' must be rows of 6 finite numbers (x1, y1, z1, x2, y2, z2), "
+                         f"got shape {lines.shape}")
+    lines = lines.reshape(-1, 6)
     pts = lines.reshape(-1, 3)
     _vtk.write_polydata(out_file, pts, lines=[[2 * i, 2 * i + 1] for i in range(len(lines))])
     return 0
@@ -178,10 +218,22 @@ def output_vtk_pore(axis, length, outer_rad_left, outer_rad_right, pos, rad_left
     revolution (left radius to right radius over `length`) with rounded
     (torus) entrances of `smoothing_radius`, discretised with 2 m sections
     around and m along each rounding; any axis direction."""
-    if not isinstance(m, (int, np.integer)) or m < 2:
-        raise ValueError(f"output_vtk_pore: parameter 'm' must be an integer >= 2, got {m!r}")
-    axis, e1, e2 = _perpendicular_basis(np.asarray(axis, dtype=float))
-    pos = np.asarray(pos, dtype=float)
+    owner = "output_vtk_pore"
+    if isinstance(m, bool) or not isinstance(m, (int, np.integer)) or m < 2:
+        raise ValueError(f"{owner}: parameter 'm' must be an integer >= 2, got {m!r}")
+    axis, e1, e2 = _perpendicular_basis(_checked(owner, "axis", axis, "dir"))
+    pos = _checked(owner, "pos", pos, "vec")
+    length = _checked(owner, "length", length, "pos")
+    rad_left = _checked(owner, "rad_left", rad_left, "pos")
+    rad_right = _checked(owner, "rad_right", rad_right, "pos")
+    smoothing_radius = _checked(owner, "smoothing_radius", smoothing_radius, "nonneg")
+    outer_rad_left = _checked(owner, "outer_rad_left", outer_rad_left, "pos")
+    outer_rad_right = _checked(owner, "outer_rad_right", outer_rad_right, "pos")
+    # the annuli that close the faces run from the rounded entrance out to the outer radius
+    for side, inner, outer in (("left", rad_left, outer_rad_left), ("right", rad_right, outer_rad_right)):
+        if outer <= inner + smoothing_radius:
+            raise ValueError(f"{owner}: outer_rad_{side} ({outer!r}) must be larger than rad_{side} + "
+                             f"smoothing_radius ({inner + smoothing_radius!r})")
     n = 2 * m
     # profile (x along the axis, r radius): left rounding, straight part, right rounding
     prof = []

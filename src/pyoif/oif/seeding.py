@@ -16,12 +16,22 @@ with uniformly random orientations, and a placement is kept only if
   that intersect always have a pair of nodes closer than that, so no two
   cells interpenetrate,
 - the new cell's centre is not inside another cell and no other cell's
-  centre is inside the new one (one cell swallowing a small one).
+  centre is inside the new one (one cell swallowing a small one),
+- the same holds for the particles and OifCells already in the system
+  (every particle is an obstacle at distance `gap`; the gap to an existing
+  cell also covers that cell's longest edge),
+- no periodic extent reaches half the box length (the half-box rule of
+  OifCell: membrane bonds use the nearest periodic image).
+
+A `gap` below the safe minimum is raised to it silently (documented
+behaviour, kept for existing scripts).
 
 The same `seed` gives the same cells. When the next cell cannot be placed
 in `max_attempts` tries, ``SeedingError`` says how many were placed and
 which haematocrit that is.
 """
+import numbers
+
 import numpy as np
 
 from . import mesh_io
@@ -104,10 +114,112 @@ def _region(system, region):
     box = np.asarray(system.box_l, dtype=float)
     if region is None:
         return np.zeros(3), box
-    lo, hi = (np.asarray(x, dtype=float) for x in region)
-    if lo.shape != (3,) or hi.shape != (3,) or not np.all(hi > lo):
-        raise ValueError(f"seed_cells: parameter 'region' must be two corners (lo, hi) with hi > lo, got {region!r}")
+    msg = f"seed_cells: parameter 'region' must be two corners (lo, hi) of 3 finite numbers with hi > lo, got {region!r}"
+    try:
+        if len(region) != 2:
+            raise ValueError(msg)
+        raw = [np.asarray(x) for x in region]
+    except (TypeError, ValueError):
+        raise ValueError(msg) from None
+    if any(r.dtype.kind not in "iuf" or r.shape != (3,) for r in raw):
+        raise ValueError(msg)
+    lo, hi = (r.astype(float) for r in raw)
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi > lo)):
+        raise ValueError(msg)
     return lo, hi
+
+
+def _is_int(x):
+    return isinstance(x, (numbers.Integral, np.integer)) and not isinstance(x, (bool, np.bool_))
+
+
+def _per_type(name, value, k, check, default):
+    """One value per cell type: None -> default, a scalar -> repeated, or a
+    list of k; each passed through check(name, item)."""
+    if value is None:
+        return [default] * k
+    if np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
+        return [check(name, value)] * k
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
+        raise TypeError(f"seed_cells: parameter '{name}' must be a number or a list of {k}, got {value!r}")
+    items = list(value)
+    if len(items) != k:
+        raise ValueError(f"seed_cells: parameter '{name}' needs {k} values (one per cell type), got {value!r}")
+    return [check(name, x) for x in items]
+
+
+def _count(name, x):
+    # no truncation: 2.7 cells is a mistake, not 2 cells
+    if not _is_int(x):
+        raise TypeError(f"seed_cells: parameter '{name}' must hold whole numbers of cells (integers), got {x!r}")
+    if x < 0:
+        raise ValueError(f"seed_cells: parameter '{name}' must hold numbers of cells >= 0, got {x!r}")
+    return int(x)
+
+
+def _ptype(name, x):
+    if not _is_int(x):
+        raise TypeError(f"seed_cells: parameter '{name}' must hold particle types (integers >= 0), got {x!r}")
+    if not 0 <= x <= 2**31 - 1:
+        raise ValueError(f"seed_cells: parameter '{name}' must hold particle types in 0..{2**31 - 1}, got {x!r}")
+    return int(x)
+
+
+def _length(name, x):
+    """margin/gap: None (default) or a finite distance >= 0 (NaN would
+    silently switch the overlap checks off)."""
+    if x is None:
+        return None
+    if not isinstance(x, numbers.Real) or isinstance(x, (bool, np.bool_)):
+        raise TypeError(f"seed_cells: parameter '{name}' must be a number (or None for the default), got {x!r}")
+    if not np.isfinite(x) or x < 0:
+        raise ValueError(f"seed_cells: parameter '{name}' must be finite and >= 0, got {x!r}")
+    return float(x)
+
+
+def _min_width(nodes):
+    """Smallest extent of the point set over many directions (close to the
+    narrowest width of the shape in any orientation)."""
+    rel = nodes - nodes.mean(axis=0)
+    k = np.arange(400) + 0.5
+    theta = np.arccos(1.0 - k / 400.0)  # half sphere of directions (Fibonacci lattice)
+    phi = np.pi * (1.0 + 5.0 ** 0.5) * k
+    dirs = np.stack([np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta), np.cos(theta)], axis=1)
+    _, _, vt = np.linalg.svd(rel, full_matrices=False)  # principal axes: the narrowest is usually one
+    proj = rel @ np.vstack([dirs, vt]).T
+    return float((proj.max(axis=0) - proj.min(axis=0)).min())
+
+
+def _existing_obstacles(system):
+    """(KD-tree of all particles already in the system, periodic-aware, or
+    None; list of live OifCells of this system as placed-cell entries)."""
+    from .oif_classes import live_cells
+    parts = system.part.all()
+    tree = None
+    if len(parts):
+        from scipy.spatial import cKDTree
+        box = np.asarray(system.box_l, dtype=float)
+        periodic = np.asarray(system.periodicity, dtype=bool)
+        pos = _fold(np.asarray(parts.pos, dtype=float), box, periodic)
+        tree = cKDTree(pos, boxsize=np.where(periodic, box, 0.0) if periodic.any() else None)
+    cells = []
+    for c in live_cells(system):
+        nodes = c.mesh.positions()
+        centre = nodes.mean(axis=0)
+        radius = float(np.linalg.norm(nodes - centre, axis=1).max())
+        # the gap to this cell must also cover its own longest edge (see the module docstring)
+        cells.append(((None, None, None, nodes, centre, radius, mesh_io.outward(c.mesh.triangle_ids)),
+                      1.2 * c.max_edge_length()))
+    return tree, cells
+
+
+def _fold(pos, box, periodic):
+    """Positions folded into [0, box) along periodic axes (cKDTree's torus)."""
+    pos = pos.copy()
+    pos[:, periodic] = np.mod(pos[:, periodic], box[periodic])
+    # np.mod can round up to exactly box for tiny negative inputs
+    pos[:, periodic] = np.where(pos[:, periodic] >= box[periodic], 0.0, pos[:, periodic])
+    return pos
 
 
 def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None, boundaries=(), region=None,
@@ -120,54 +232,116 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
     counts: number of cells per type (int or list), or haematocrit: target
     volume fraction of the fluid (inside `region`, outside `boundaries`),
     split between types by `fractions` of the cell volume (default equal).
+    boundaries: list of shapes (a single shape is taken as a list of one).
     particle_types: particle type per cell type (default 0 for all).
     margin: least node distance from boundaries (default 0.5 x the longest
-    edge). gap: least node distance between cells (default 1.2 x longest edge).
+    edge). gap: least node distance between cells (default 1.2 x longest
+    edge; a smaller gap is raised to that safe minimum). Particles already
+    in the system (other cells, tracers) are obstacles: new nodes keep at
+    least `gap` from them, and no new cell is placed inside an existing
+    cell or around one. All arguments are checked before anything is
+    created; if creating the cells fails, the cells created by this call
+    are removed again.
     """
-    from .oif_classes import OifCell, OifCellType
-    types = [cell_types] if isinstance(cell_types, OifCellType) else list(cell_types)
+    from .oif_classes import OifCell, OifCellType, _exclusion_rings, _real
+    import lbmd
+    if not isinstance(system, lbmd.System):
+        raise TypeError(f"seed_cells: parameter 'system' must be an lbmd.System, got {type(system).__name__}")
+    if isinstance(cell_types, OifCellType):
+        types = [cell_types]
+    elif isinstance(cell_types, (list, tuple)):
+        types = list(cell_types)
+    else:
+        types = []
     if not types or not all(isinstance(t, OifCellType) for t in types):
         raise TypeError("seed_cells: parameter 'cell_types' must be an OifCellType or a list of them")
+    for i, t in enumerate(types):
+        if t.system is not system:
+            raise ValueError(f"seed_cells: cell type {i} belongs to another lbmd.System than parameter "
+                             f"'system'; create the cell types on the system you seed")
     k = len(types)
-    if particle_types is None:
-        particle_types = [0] * k
-    elif np.ndim(particle_types) == 0:
-        particle_types = [int(particle_types)] * k
-    if len(particle_types) != k:
-        raise ValueError(f"seed_cells: parameter 'particle_types' needs {k} values, got {particle_types!r}")
-    boundaries = list(boundaries)
+    particle_types = _per_type("particle_types", particle_types, k, _ptype, 0)
+    particle_mass = _real("seed_cells", "particle_mass", particle_mass, "pos")
+    _exclusion_rings("seed_cells", exclusion_neighbours)
+    if self_cell_cutoff is not None:
+        _real("seed_cells", "self_cell_cutoff", self_cell_cutoff, "nonneg")
+    if not isinstance(create, (bool, np.bool_)):
+        raise TypeError(f"seed_cells: parameter 'create' must be True or False, got {create!r}")
+    if seed is not None and (not _is_int(seed) or seed < 0):
+        raise TypeError(f"seed_cells: parameter 'seed' must be an integer >= 0 or None, got {seed!r}")
+    if not _is_int(max_attempts) or max_attempts < 1:
+        raise TypeError(f"seed_cells: parameter 'max_attempts' must be an integer >= 1, got {max_attempts!r}")
+    margin, gap = _length("margin", margin), _length("gap", gap)
+    if boundaries is None:
+        boundaries = []
+    elif hasattr(boundaries, "calc_dist"):  # one shape
+        boundaries = [boundaries]
+    elif isinstance(boundaries, (list, tuple)):
+        boundaries = list(boundaries)
+    else:
+        raise TypeError(f"seed_cells: parameter 'boundaries' must be a list of shapes, got "
+                        f"{type(boundaries).__name__}")
+    for i, b in enumerate(boundaries):
+        if not callable(getattr(b, "calc_dist", None)):
+            raise TypeError(f"seed_cells: parameter 'boundaries': item {i} is not a shape (no calc_dist), "
+                            f"got {type(b).__name__}")
     lo, hi = _region(system, region)
     vols = np.array([t.volume0 for t in types])
     if (counts is None) == (haematocrit is None):
         raise TypeError("seed_cells: give exactly one of 'counts' and 'haematocrit'")
+    box = np.asarray(system.box_l, dtype=float)
+    periodic = np.asarray(system.periodicity, dtype=bool)
+    # half-box rule (see OifCell): a type too wide in every orientation can never be placed
+    for i, t in enumerate(types):
+        width = _min_width(t.mesh.positions())
+        for axis in np.nonzero(periodic & (width >= 0.5 * box))[0]:
+            raise ValueError(f"seed_cells: cell type {i} spans at least {width:.6g} in any orientation, not "
+                             f"less than half the periodic box length {box[axis]:.6g} along {'xyz'[axis]} "
+                             f"(box_l[{axis}]); membrane bonds use the nearest periodic image, so its forces "
+                             f"would be wrong. Use a longer box, a non-periodic axis or smaller cells")
     v_fluid = None
+    # random close packing of deformable discs is far below 1; beyond ~0.6 rigid placement cannot work
+    packing = 0.6
     if counts is not None:
-        counts = [int(counts)] * k if np.ndim(counts) == 0 else [int(c) for c in counts]
-        if len(counts) != k or min(counts) < 0:
-            raise ValueError(f"seed_cells: parameter 'counts' needs {k} values >= 0, got {counts!r}")
+        counts = _per_type("counts", counts, k, _count, 0)
+        need = float(np.dot(counts, vols))
+        v_region = float(np.prod(hi - lo))
+        # fail fast (before building a list of 10**9 placements): the region volume bounds
+        # the fluid volume; the exact fluid volume is worth its grid only for a close call
+        v_avail = v_region
+        if boundaries and need > 0.1 * packing * v_region:
+            v_avail = fluid_volume(system, boundaries, (lo, hi))
+        if need > packing * v_avail:
+            raise SeedingError(f"seed_cells: {sum(counts)} cells of total volume {need:.4g} cannot be placed "
+                               f"at random in the available volume {v_avail:.4g} (at most about {packing} of "
+                               f"it); seed fewer cells or enlarge the region")
     else:
-        if not 0 < haematocrit < 1:
-            raise ValueError(f"seed_cells: parameter 'haematocrit' must be in (0, 1), got {haematocrit!r}")
-        fr = np.ones(k) / k if fractions is None else np.asarray(fractions, dtype=float)
-        if fr.shape != (k,) or np.any(fr < 0) or fr.sum() <= 0:
-            raise ValueError(f"seed_cells: parameter 'fractions' needs {k} values >= 0, got {fractions!r}")
+        if (not isinstance(haematocrit, numbers.Real) or isinstance(haematocrit, (bool, np.bool_))
+                or not 0 < haematocrit < 1):
+            raise ValueError(f"seed_cells: parameter 'haematocrit' must be in (0, 1) (a number), got {haematocrit!r}")
+        try:
+            fr = np.ones(k) / k if fractions is None else np.asarray(fractions, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"seed_cells: parameter 'fractions' needs {k} numbers, got {fractions!r}") from None
+        if fr.shape != (k,) or not np.all(np.isfinite(fr)) or np.any(fr < 0) or fr.sum() <= 0:
+            raise ValueError(f"seed_cells: parameter 'fractions' needs {k} finite values >= 0, got {fractions!r}")
         fr = fr / fr.sum()
         v_fluid = fluid_volume(system, boundaries, (lo, hi))
         counts = [int(round(haematocrit * v_fluid * f / v)) for f, v in zip(fr, vols)]
         if sum(counts) == 0:
             raise SeedingError(f"seed_cells: haematocrit {haematocrit} of a fluid volume {v_fluid:.4g} is "
                                f"less than one cell (cell volume {vols.min():.4g})")
-        # random close packing of deformable discs is far below 1; beyond ~0.6 rigid placement cannot work
-        if sum(c * v for c, v in zip(counts, vols)) > 0.6 * v_fluid:
+        if sum(c * v for c, v in zip(counts, vols)) > packing * v_fluid:
             raise SeedingError(f"seed_cells: haematocrit {haematocrit} cannot be reached by random placement "
-                               f"of undeformed cells (at most about 0.6 of the fluid volume {v_fluid:.4g}); "
+                               f"of undeformed cells (at most about {packing} of the fluid volume {v_fluid:.4g}); "
                                f"seed fewer cells and compress, or enlarge the geometry")
     longest = max(t.mesh.max_edge_length() for t in types)
-    margin = 0.5 * longest if margin is None else float(margin)
-    gap = 1.2 * longest if gap is None else max(float(gap), 1.2 * longest)
+    margin = 0.5 * longest if margin is None else margin
+    # below 1.2 x the longest edge two meshes can interpenetrate without a close
+    # node pair, so a smaller gap is raised to that minimum (documented above)
+    gap = 1.2 * longest if gap is None else max(gap, 1.2 * longest)
     rng = np.random.default_rng(seed)
-    box = np.asarray(system.box_l, dtype=float)
-    periodic = np.asarray(system.periodicity, dtype=bool)
+    tree, existing = _existing_obstacles(system)
 
     # order: larger cells first (harder to place), types interleaved reproducibly
     order = sorted((i for i in range(k) for _ in range(counts[i])), key=lambda i: -vols[i])
@@ -182,12 +356,20 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
             rot = _random_rotation(rng)
             centre = lo + rng.random(3) * (hi - lo)
             nodes = (rel0 - centre0) @ rot.T + centre
+            if np.any(periodic & (nodes.max(axis=0) - nodes.min(axis=0) >= 0.5 * box)):
+                continue  # this orientation breaks the half-box rule
             if boundaries and not _clear_of_boundaries(nodes, centre, radius, boundaries, margin):
                 continue
             if not periodic.all():
                 inside = np.all((nodes >= 0) | periodic, axis=1) & np.all((nodes <= box) | periodic, axis=1)
                 if not inside.all():
                     continue
+            if tree is not None and np.any(tree.query(_fold(nodes, box, periodic), k=1,
+                                                      distance_upper_bound=gap)[0] < gap):
+                continue  # too close to a particle already in the system
+            if any(_overlaps(nodes, centre, radius, outward_tris, [entry], max(gap, own_gap), box, periodic)
+                   for entry, own_gap in existing):
+                continue  # too close to, inside or around a cell already in the system
             if _overlaps(nodes, centre, radius, outward_tris, placed, gap, box, periodic):
                 continue
             placed.append((ti, centre - rot @ centre0, rot, nodes, centre, radius, outward_tris))
@@ -203,10 +385,19 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
     if not create:
         return placements
     cells = []
-    for ti, origin, angles in placements:
-        cells.append(OifCell(cell_type=types[ti], particle_type=particle_types[ti], origin=origin,
-                             rotate=angles, particle_mass=particle_mass,
-                             exclusion_neighbours=exclusion_neighbours, self_cell_cutoff=self_cell_cutoff))
+    try:
+        for ti, origin, angles in placements:
+            cells.append(OifCell(cell_type=types[ti], particle_type=particle_types[ti], origin=origin,
+                                 rotate=angles, particle_mass=particle_mass,
+                                 exclusion_neighbours=exclusion_neighbours, self_cell_cutoff=self_cell_cutoff))
+    except BaseException:
+        # all or nothing: remove the cells this call created (with their bonds)
+        for c in cells:
+            try:
+                c.mesh._parts.remove()
+            except Exception:  # pragma: no cover - report the original error
+                pass
+        raise
     return cells
 
 
