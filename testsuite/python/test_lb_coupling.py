@@ -212,6 +212,29 @@ class Coupling(unittest.TestCase):
             np.testing.assert_allclose(lbf.get_interpolated_velocity(pos), grad @ np.array(pos),
                                        rtol=1e-12, atol=1e-14)
 
+    def test_particle_outside_a_non_periodic_axis(self):
+        """Between walls at z = 0.5 and 7.5 of a box non-periodic in z, a
+        particle at z = 12.7 coupled to the fluid on the wrapped side
+        (before); now the run stops naming it, and once it is moved back the
+        coupling goes on from a consistent node list."""
+        system = lbmd.System(box_l=[8.0, 8.0, 8.0], periodicity=[True, True, False])
+        system.time_step = 0.1
+        lbf = system.actors.add(lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1))
+        for normal, dist in (([0, 0, 1], 0.5), ([0, 0, -1], -7.5)):
+            system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
+                shape=lbmd.shapes.Wall(normal=normal, dist=dist)))
+        system.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+        system.part.add(pos=[[2.0, 2.0, 3.0], [4.0, 4.0, 4.0]])
+        system.integrator.run(3)
+        p = system.part.add(pos=[3.0, 3.0, 12.7], v=[0.01, 0, 0])
+        with self.assertRaisesRegex(lbmd.SimulationInstability,
+                                    r"particle 2 at 12.7 along the non-periodic axis 2 left the box"):
+            system.integrator.run(1)
+        p.pos = [3.0, 3.0, 4.0]
+        system.integrator.run(70)  # a renumbering of the node list included
+        self.assertTrue(np.all(np.isfinite(system.part.all().v)))
+        self.assertLess(np.linalg.norm(p.v), 0.01)  # damped by the fluid
+
 
 if __name__ == "__main__":
     unittest.main()

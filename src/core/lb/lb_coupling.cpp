@@ -64,18 +64,50 @@ Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const V
   return u;
 }
 
-void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& /*box*/,
+[[noreturn]] __attribute__((noinline, cold)) void throw_outside(const ParticleStore& p,
+                                                               const BoxGeometry& box) {
+  for (std::size_t i = 0; i < p.n_local(); ++i)
+    for (int d = 0; d < 3; ++d)
+      if (!box.periodic()[d] && !(p.pos[i][d] >= 0.0 && p.pos[i][d] <= box.length()[d]))
+        throw SimulationInstability(
+            "lattice-Boltzmann coupling: particle " + std::to_string(p.id[i]) + " at " +
+            format_number(p.pos[i][d]) + " along the non-periodic axis " + std::to_string(d) +
+            " left the box [0, " + format_number(box.length()[d]) +
+            "]; the fluid has no nodes there (it would couple to the far side). Walls "
+            "(constraints) keep particles inside; check the node-wall interaction and the "
+            "time step");
+  throw std::logic_error("throw_outside: no particle outside");
+}
+
+void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
                       const CouplingParams& params, std::uint64_t step, double time_step) {
   if (params.gamma <= 0.0)
     return;
   // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
   // repeated computation for the same step deposits F dt / 2 after taking
   // back the in-flight half of the previous computation of this step
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  // On a non-periodic axis the lattice ends at the box: a particle outside
+  // it would take its stencil from the far side (wrapped indices). Checked
+  // before anything changes, so that the particle can be moved back and the
+  // run go on (a pass cut short would leave the ledger half updated).
+  if (!box.periodic()[0] || !box.periodic()[1] || !box.periodic()[2]) {
+    const Vec3 lower(box.periodic()[0] ? -HUGE_VAL : 0.0, box.periodic()[1] ? -HUGE_VAL : 0.0,
+                     box.periodic()[2] ? -HUGE_VAL : 0.0);
+    const Vec3 upper(box.periodic()[0] ? HUGE_VAL : box.length()[0],
+                     box.periodic()[1] ? HUGE_VAL : box.length()[1],
+                     box.periodic()[2] ? HUGE_VAL : box.length()[2]);
+    bool outside = false;
+    for (std::size_t i = 0; i < n; ++i)
+      outside |= !((p.pos[i].array() >= lower.array()).all() &&
+                   (p.pos[i].array() <= upper.array()).all());
+    if (outside)
+      throw_outside(p, box);
+  }
   auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
-  auto& p = particles;
-  const std::size_t n = p.n_local();
   // the force field is switched on (and read by the next update) only when
   // something is deposited: a fluid without particles keeps the plain kernel
   if (n > 0 || (same_step && !ledger.last_impulse.empty()))

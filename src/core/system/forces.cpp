@@ -195,7 +195,8 @@ void System::add_constraint_forces(Energies* e) {
         msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
             << ") penetrated the non-penetrable " << constraint->shape->name()
             << " constraint (signed distance " << dist[i] << ") at time " << time
-            << "; strengthen the node-wall interaction or reduce the time step";
+            << "; at the start of a run this means it was placed inside: check the initial "
+               "positions; later, strengthen the node-wall interaction or reduce the time step";
         throw SimulationInstability(msg.str());
       }
       double exact;
