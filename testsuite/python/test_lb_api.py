@@ -121,6 +121,8 @@ class BadInput(unittest.TestCase):
             lbf.write_vtk_velocity(3)
         with self.assertRaisesRegex(ValueError, "cannot open"):
             lbf.write_vtk_velocity("/nonexistent/dir/v.vtk")
+        with self.assertRaisesRegex(ValueError, "NUL"):  # C would cut the name there
+            lbf.write_vtk_velocity("/tmp/v\0x.vtk")
         # a misspelt property was stored on the temporary node object (before)
         with self.assertRaisesRegex(AttributeError, "no property 'vel'"):
             lbf[0, 0, 0].vel = [0.01, 0, 0]

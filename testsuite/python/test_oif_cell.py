@@ -303,16 +303,32 @@ class TestOifCell(unittest.TestCase):
         self.assertEqual(cell.cell_id, 0)
         self.assertEqual(len(self.system.part), 374)
 
-    def test_half_box_rule(self):
-        """A cell spanning half a periodic box length would get wrong bond forces."""
-        big = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(8.0, 8.0, 8.0))
-        with self.assertRaisesRegex(ValueError, r"spans 16(\.0*)? along y, not less than half the periodic box "
-                                                r"length 30"):
+    def test_periodic_extent_rule(self):
+        """A cell as wide as a periodic box overlaps its own image, and edges
+        of a quarter box would be cut by nearest-image bonds: refused. A cell
+        between half and a whole box length is fine (its volume exact)."""
+        big = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(16.0, 16.0, 16.0))
+        with self.assertRaisesRegex(ValueError, r"spans 32(\.0*)? along y, not less than the periodic box "
+                                                r"length 30.*own periodic image"):
             oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
         self.assertEqual(len(self.system.part), 0)
+        # an octahedron of radius 5: 10 wide, edges 7.07
+        with open(self.path("octa_nodes.dat"), "w") as f:
+            f.write("5 0 0\n-5 0 0\n0 5 0\n0 -5 0\n0 0 5\n0 0 -5\n")
+        with open(self.path("octa_triangles.dat"), "w") as f:
+            f.write("0 2 4\n2 1 4\n1 3 4\n3 0 4\n2 0 5\n1 2 5\n3 1 5\n0 3 5\n")
+        coarse = oif.OifCellType(self.path("octa_nodes.dat"), self.path("octa_triangles.dat"),
+                                 system=self.system, kslin=1.0)
+        self.system.box_l = [40.0, 12.0, 30.0]  # the 10-wide cell fits, its 7.07 edges do not
+        with self.assertRaisesRegex(ValueError, r"longest edge 7\.07\d* is not less than a quarter of the "
+                                                r"periodic box length 12 along y"):
+            oif.OifCell(cell_type=coarse, particle_type=0, origin=[20, 6, 15])
+        self.system.box_l = [40.0, 30.0, 30.0]
+        half = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(8.0, 8.0, 8.0))
+        cell = oif.OifCell(cell_type=half, particle_type=0, origin=[20, 29, 15])  # 16 wide, across y = 30
+        self.assertAlmostEqual(cell.volume(), half.volume0, places=9)
         self.system.periodicity = [True, False, False]
-        cell = oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
-        self.assertAlmostEqual(cell.volume(), big.volume0, places=9)
+        oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
 
     def test_stale_cell_objects(self):
         """After clear() or removal, a cell object refuses to compute on other particles."""

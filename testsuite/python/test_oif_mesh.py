@@ -254,6 +254,24 @@ class TestMeshInput(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "point 2 has non-finite coordinates"):
             self.cell_type(path, "")
 
+    def test_meshio_indices_and_unparsable_files(self):
+        """An OFF index -1 meant the last node to numpy (accepted, before); an
+        empty .vtk made meshio call sys.exit, which ended the script."""
+        nodes, tris = octahedron()
+        for bad in (-1, 6):
+            path = os.path.join(self.tmp.name, f"index{bad}.off")
+            with open(path, "w") as f:
+                f.write("OFF\n6 8 0\n" + "".join(f"{p[0]} {p[1]} {p[2]}\n" for p in nodes))
+                rows = [list(t) for t in tris]
+                rows[3][2] = bad
+                f.write("".join(f"3 {a} {b} {c}\n" for a, b, c in rows))
+            with self.assertRaisesRegex(ValueError, rf"triangle 3 .*{bad}\] refers to a node outside 0..5"):
+                self.cell_type(path, "")
+        empty = os.path.join(self.tmp.name, "empty.vtk")
+        open(empty, "w").close()
+        with self.assertRaisesRegex(ValueError, "cannot read .*empty.vtk"):
+            self.cell_type(empty, "")
+
     def test_from_arrays_checks(self):
         nodes, tris = octahedron()
         m = oif.Mesh.from_arrays(self.system, nodes, np.array(tris, dtype=float))  # whole floats pass

@@ -84,10 +84,11 @@ class TestSeeding(unittest.TestCase):
             oif.seed_cells(system, rbc, haematocrit=0.8, boundaries=walls, seed=1)
         # below the packing bound but too crowded for random placement of big spheres
         big = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(4.4, 4.4, 4.4))
-        # a sphere of diameter 8.8 breaks the half-box rule along a periodic z of 12
-        with self.assertRaisesRegex(ValueError, r"cell type 0 spans at least 8\.\d+ in any orientation.*"
-                                                r"half the periodic box length 12 along z"):
-            oif.seed_cells(system, big, counts=1, boundaries=walls, seed=1, create=False)
+        # a sphere of diameter 13.2 would overlap its own image along a periodic z of 12
+        huge = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(6.6, 6.6, 6.6))
+        with self.assertRaisesRegex(ValueError, r"cell type 0 spans at least 1[23]\.\d+ in any orientation.*"
+                                                r"the periodic box length 12 along z.*own periodic image"):
+            oif.seed_cells(system, huge, counts=1, boundaries=walls, seed=1, create=False)
         system.periodicity = [True, True, False]  # the walls bound z anyway
         with self.assertRaisesRegex(SeedingError, r"could not place cell \d+ of 9 in 200 random tries; placed \d+"):
             oif.seed_cells(system, big, counts=9, boundaries=walls, seed=1, max_attempts=200, create=False)
@@ -138,7 +139,7 @@ class TestSeeding(unittest.TestCase):
             (ValueError, "'particle_types'", dict(counts=[1, 1], particle_types=[0, -1])),
             (ValueError, "'particle_types' needs 2", dict(counts=[1, 1], particle_types=[0])),
             (TypeError, "'counts'", dict(counts=2.7)),
-            (TypeError, "'counts'", dict(counts=[1, 2.0])),
+            (TypeError, "'counts'", dict(counts=[1, 2.5])),
             (ValueError, "'gap'", dict(counts=1, gap=float("nan"))),
             (ValueError, "'gap'", dict(counts=1, gap=-1.0)),
             (ValueError, "'margin'", dict(counts=1, margin=float("nan"))),

@@ -202,14 +202,23 @@ class ParticleBadInput(unittest.TestCase):
         self.assertEqual((p.type, p.mol_id), (2, 0))
         p.mol_id = np.float64(3.0)  # a whole number stored as a float is fine
         self.assertEqual(p.mol_id, 3)
+        # whole numbers of any numeric kind are ids (as int(pid) took them before)
+        for pid in (np.int64(0), np.array(0), np.float64(0.0), 0.0):
+            self.assertEqual(s.part.by_id(pid).id, 0)
+            self.assertTrue(s.part.exists(pid))
         self.assertRaisesNaming(TypeError, "pid", s.part.by_id, 0.7)
         self.assertRaisesNaming(ValueError, "pid", s.part.by_id, 2**40)
         q = add(pos=[2, 2, 2])
         h = HarmonicBond(k=1.0, r_0=1.0)
         s.bonded_inter.add(h)
         self.assertRaisesNaming(ValueError, "partner", p.add_bond, (h, 2**32 + 1))
-        self.assertRaisesNaming(TypeError, "partners", p.add_bond, (h, 0.9))
+        self.assertRaisesNaming(TypeError, "partner", p.add_bond, (h, 0.9))
         self.assertEqual(p.bonds, ())
+        # bulk bonds: 0.5 -> 0 and 2**32 + 1 -> 1 made wrong bonds (before)
+        for ids, exc in (([[0.5, 1.7]], TypeError), ([[0, 2**32 + 1]], ValueError),
+                         ([[True, False]], TypeError), ([["0", "1"]], TypeError), ([[0, -1]], ValueError)):
+            self.assertRaisesNaming(exc, "'ids'", s.part.add_bonds, h, ids)
+        self.assertEqual(len(s._core.get_bonds(s.bonded_inter._id_of(h))), 0)
         self.assertRaisesNaming(TypeError, "tuple", p.delete_bond, ())
         self.assertRaisesNaming(ValueError, "partner", p.delete_bond, (h, -3))
         self.assertRaisesNaming(TypeError, "pid", s.part.exists, "a")

@@ -13,6 +13,7 @@ files, kept so that files round-trip with ESPResSo): for a stored triangle
 
 Everything here works on numpy arrays; it needs no simulation system.
 """
+import numbers
 import os
 
 import numpy as np
@@ -38,6 +39,18 @@ class MeshData:
         self.triangle_lines = (np.arange(1, len(self.triangles) + 1) if triangle_lines is None
                                else np.asarray(triangle_lines))
         self.flipped = np.zeros(len(self.triangles), dtype=bool)
+
+
+def is_integer(value):
+    """An integer of any numeric kind: int, np.int64, a 0-d integer array, or
+    a whole float (np.round(1.2) is 1.0); not bool, not 2.7."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if isinstance(value, (numbers.Integral, np.integer)):
+        return True
+    return isinstance(value, (float, np.floating)) and bool(np.isfinite(value)) and float(value).is_integer()
 
 
 def _where(path, line):
@@ -177,12 +190,21 @@ def _read_with_meshio(path):
         raise ValueError(f"mesh input: mesh file '{path}' does not exist")
     try:
         m = meshio.read(path)
+    except SystemExit:  # some meshio readers print their complaint and sys.exit()
+        raise ValueError(f"mesh input: cannot read '{path}': meshio could not parse it (its message is "
+                         f"printed above)") from None
     except Exception as e:  # meshio raises many kinds
-        raise ValueError(f"mesh input: cannot read '{path}': {e}") from None
+        raise ValueError(f"mesh input: cannot read '{path}': {e or type(e).__name__}") from None
     tris = [c.data for c in m.cells if c.type == "triangle"]
     if not tris:
         raise ValueError(f"mesh input: '{path}' contains no triangles")
     points = np.asarray(m.points, dtype=float)
+    for block in tris:  # numpy would take -1 as the last node, and fail on too large ones
+        out = (block < 0) | (block >= len(points))
+        if np.any(out):
+            row = int(np.nonzero(out.any(axis=1))[0][0])
+            raise ValueError(f"mesh input: '{path}': triangle {row} {block[row].tolist()} refers to a node "
+                             f"outside 0..{len(points) - 1}")
     if points.shape[1] == 2:
         points = np.hstack([points, np.zeros((len(points), 1))])
     bad = np.nonzero(~np.all(np.isfinite(points), axis=1))[0]

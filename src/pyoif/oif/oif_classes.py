@@ -24,6 +24,7 @@ from lbmd.particle_data import ParticleHandle
 
 from . import geometry as geo
 from . import mesh_io
+from .mesh_io import is_integer as _is_int
 from . import vtk as _vtk
 from .oif_utils import (small_epsilon, custom_str, vec_distance, get_triangle_normal, area_triangle,
                         angle_btw_triangles, angle_btw_vectors)
@@ -85,10 +86,6 @@ def live_cells(system):
 _INT32_MAX = 2**31 - 1
 
 
-def _is_int(value):
-    return isinstance(value, (numbers.Integral, np.integer)) and not isinstance(value, (bool, np.bool_))
-
-
 def _exclusion_rings(owner, exclusion_neighbours):
     """Number of edge rings excluded from self-cell contacts."""
     if isinstance(exclusion_neighbours, (bool, np.bool_)):
@@ -110,20 +107,31 @@ def _node_ids(owner, name, ids, n):
     return [int(i) for i in ids]
 
 
-def check_periodic_extent(owner, system, pos, what="the cell"):
-    """Raise ValueError when nodes span half a periodic box length or more:
-    the engine evaluates membrane bonds with the nearest periodic image of
-    each partner, so such a cell would get wrong forces without any error."""
+def check_periodic_extent(owner, system, pos, longest_edge, what="the cell"):
+    """Raise ValueError, before anything is added, for a cell the engine
+    cannot represent on a periodic axis: one at least a box length wide
+    overlaps its own periodic image, and a mesh whose edges reach a quarter
+    of the box length has bonds (an edge and its two wing nodes, up to two
+    edge lengths from the bond's owner) that the nearest-image convention
+    would cut. Cells between half and a whole box length are fine: bonds
+    use the nearest image of each partner, the cell sums unfolded positions
+    (oif_cell_sums.hpp)."""
     box = np.asarray(system.box_l, dtype=float)
     periodic = np.asarray(system.periodicity, dtype=bool)
     extent = pos.max(axis=0) - pos.min(axis=0)
     for axis in range(3):
-        if periodic[axis] and extent[axis] >= 0.5 * box[axis]:
-            xyz = "xyz"[axis]
-            raise ValueError(f"{owner}: {what} spans {extent[axis]:.6g} along {xyz}, not less than half the "
-                             f"periodic box length {box[axis]:.6g} (box_l[{axis}]); membrane bonds use the "
-                             f"nearest periodic image, so its forces would be wrong. Use a longer box along "
-                             f"{xyz}, a non-periodic {xyz} axis, or a smaller cell")
+        if not periodic[axis]:
+            continue
+        xyz = "xyz"[axis]
+        if extent[axis] >= box[axis]:
+            raise ValueError(f"{owner}: {what} spans {extent[axis]:.6g} along {xyz}, not less than the periodic "
+                             f"box length {box[axis]:.6g} (box_l[{axis}]): it would overlap its own periodic "
+                             f"image. Use a longer box along {xyz}, a non-periodic {xyz} axis, or a smaller cell")
+        if 2.0 * longest_edge >= 0.5 * box[axis]:
+            raise ValueError(f"{owner}: the mesh's longest edge {longest_edge:.6g} is not less than a quarter of "
+                             f"the periodic box length {box[axis]:.6g} along {xyz} (box_l[{axis}]): membrane "
+                             f"bonds reach two edges from their owner node and use the nearest periodic image. "
+                             f"Use a finer mesh or a longer box")
 
 
 # ---------------------------------------------------------------------------
@@ -674,7 +682,7 @@ class OifCellType:
                                 f"{type(f).__name__}; for arrays build the files or use oif.Mesh.from_arrays")
         if nodes_file is None or (isinstance(nodes_file, str) and nodes_file == ""):
             raise ValueError(f"{owner}: parameter 'nodes_file' is required")
-        if triangles_file in ("", None) and str(nodes_file).endswith(".dat"):
+        if triangles_file in ("", None) and str(nodes_file).lower().endswith(".dat"):
             raise ValueError(f"{owner}: parameter 'triangles_file' is required with a nodes.dat file")
         for name, value in (("normal", normal), ("check_orientation", check_orientation)):
             if not isinstance(value, (bool, np.bool_)):
@@ -834,7 +842,7 @@ class OifCell:
         if cell_id > _INT32_MAX:
             raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
         pos = cell_type.mesh._placed_positions(origin, rotate)
-        check_periodic_extent(owner, system, pos)
+        check_periodic_extent(owner, system, pos, cell_type.mesh.max_edge_length())
         self.cell_type = cell_type
         self.system = system
         self.cell_id = cell_id

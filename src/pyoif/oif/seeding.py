@@ -20,8 +20,8 @@ with uniformly random orientations, and a placement is kept only if
 - the same holds for the particles and OifCells already in the system
   (every particle is an obstacle at distance `gap`; the gap to an existing
   cell also covers that cell's longest edge),
-- no periodic extent reaches half the box length (the half-box rule of
-  OifCell: membrane bonds use the nearest periodic image).
+- no periodic extent reaches the box length (a cell would overlap its own
+  periodic image; see OifCell).
 
 A `gap` below the safe minimum is raised to it silently (documented
 behaviour, kept for existing scripts).
@@ -35,6 +35,7 @@ import numbers
 import numpy as np
 
 from . import mesh_io
+from .mesh_io import is_integer as _is_int
 
 
 class SeedingError(ValueError):
@@ -129,10 +130,6 @@ def _region(system, region):
     return lo, hi
 
 
-def _is_int(x):
-    return isinstance(x, (numbers.Integral, np.integer)) and not isinstance(x, (bool, np.bool_))
-
-
 def _per_type(name, value, k, check, default):
     """One value per cell type: None -> default, a scalar -> repeated, or a
     list of k; each passed through check(name, item)."""
@@ -170,6 +167,8 @@ def _length(name, x):
     silently switch the overlap checks off)."""
     if x is None:
         return None
+    if isinstance(x, np.ndarray) and x.ndim == 0:
+        x = x.item()  # np.array(1.0) as 1.0
     if not isinstance(x, numbers.Real) or isinstance(x, (bool, np.bool_)):
         raise TypeError(f"seed_cells: parameter '{name}' must be a number (or None for the default), got {x!r}")
     if not np.isfinite(x) or x < 0:
@@ -271,6 +270,8 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
         raise TypeError(f"seed_cells: parameter 'seed' must be an integer >= 0 or None, got {seed!r}")
     if not _is_int(max_attempts) or max_attempts < 1:
         raise TypeError(f"seed_cells: parameter 'max_attempts' must be an integer >= 1, got {max_attempts!r}")
+    seed = None if seed is None else int(seed)
+    max_attempts = int(max_attempts)
     margin, gap = _length("margin", margin), _length("gap", gap)
     if boundaries is None:
         boundaries = []
@@ -291,14 +292,20 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
         raise TypeError("seed_cells: give exactly one of 'counts' and 'haematocrit'")
     box = np.asarray(system.box_l, dtype=float)
     periodic = np.asarray(system.periodicity, dtype=bool)
-    # half-box rule (see OifCell): a type too wide in every orientation can never be placed
+    # a type at least a box length wide in every orientation would overlap its
+    # own periodic image (see OifCell), and its edges must stay below a
+    # quarter of the box (nearest-image bonds): refused before any placement
     for i, t in enumerate(types):
         width = _min_width(t.mesh.positions())
-        for axis in np.nonzero(periodic & (width >= 0.5 * box))[0]:
+        for axis in np.nonzero(periodic & (width >= box))[0]:
             raise ValueError(f"seed_cells: cell type {i} spans at least {width:.6g} in any orientation, not "
-                             f"less than half the periodic box length {box[axis]:.6g} along {'xyz'[axis]} "
-                             f"(box_l[{axis}]); membrane bonds use the nearest periodic image, so its forces "
-                             f"would be wrong. Use a longer box, a non-periodic axis or smaller cells")
+                             f"less than the periodic box length {box[axis]:.6g} along {'xyz'[axis]} "
+                             f"(box_l[{axis}]): it would overlap its own periodic image. Use a longer box, "
+                             f"a non-periodic axis or smaller cells")
+        for axis in np.nonzero(periodic & (2.0 * t.mesh.max_edge_length() >= 0.5 * box))[0]:
+            raise ValueError(f"seed_cells: cell type {i}'s longest edge {t.mesh.max_edge_length():.6g} is not "
+                             f"less than a quarter of the periodic box length {box[axis]:.6g} along "
+                             f"{'xyz'[axis]}: membrane bonds use the nearest periodic image")
     v_fluid = None
     # random close packing of deformable discs is far below 1; beyond ~0.6 rigid placement cannot work
     packing = 0.6
@@ -356,8 +363,8 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
             rot = _random_rotation(rng)
             centre = lo + rng.random(3) * (hi - lo)
             nodes = (rel0 - centre0) @ rot.T + centre
-            if np.any(periodic & (nodes.max(axis=0) - nodes.min(axis=0) >= 0.5 * box)):
-                continue  # this orientation breaks the half-box rule
+            if np.any(periodic & (nodes.max(axis=0) - nodes.min(axis=0) >= box)):
+                continue  # in this orientation the cell would overlap its own periodic image
             if boundaries and not _clear_of_boundaries(nodes, centre, radius, boundaries, margin):
                 continue
             if not periodic.all():
@@ -378,8 +385,11 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
             v_placed = sum(vols[p[0]] for p in placed)
             what = (f" (haematocrit {v_placed / v_fluid:.4f} of the target {haematocrit})"
                     if v_fluid else "")
+            n_existing = len(system.part)
+            others = (f"; the {n_existing} particles already in the system are obstacles too"
+                      if n_existing else "")
             raise SeedingError(f"seed_cells: could not place cell {n_done + 1} of {len(order)} in "
-                               f"{max_attempts} random tries; placed {len(placed)}{what}. Use fewer or "
+                               f"{max_attempts} random tries; placed {len(placed)}{what}{others}. Use fewer or "
                                f"smaller cells, a smaller margin/gap, or a larger region")
     placements = [(p[0], p[1], rotation_to_angles(p[2])) for p in placed]
     if not create:

@@ -9,7 +9,7 @@ BondedInteraction subclass).
 import numpy as np
 
 from . import _lbmd
-from .validation import Param, ParameterObject, parse, positive, non_negative
+from .validation import INT32_MAX, Param, ParameterObject, integers, parse, positive, non_negative
 
 
 # ---------------------------------------------------------------------------
@@ -257,7 +257,10 @@ class BondedInteractions:
 
     def _add_bonds(self, bond, ids, per_bond=None):
         bond_id = self._id_of(bond)
-        ids = np.ascontiguousarray(np.asarray(ids, dtype=np.int32))
+        # whole numbers in the id range only: 0.5 or 2**32 + 1 must not become another particle
+        ids = integers("add_bonds", "ids", ids, 0, INT32_MAX - 1)
+        if np.ndim(ids) == 1 and np.size(ids) == 0:
+            ids = ids.reshape(0, bond.n_partners + 1)
         k = bond.n_partners + 1
         if ids.ndim != 2 or ids.shape[1] != k:
             raise ValueError(f"{type(bond).__name__} joins {k} particles: expected an M×{k} "

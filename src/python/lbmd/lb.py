@@ -27,12 +27,12 @@ def _cpus():
 
 
 def _threads_param():
-    # more threads than CPUs never helps the memory-bound kernel (a few more
-    # are allowed, e.g. for tests), and a failed thread creation would end
-    # the interpreter inside OpenMP
-    limit = 4 * _cpus()
-    return Param("n_threads", "int", 0, check=(lambda n: 0 <= n <= limit,
-                                               f"in 0..{limit} (4 x the CPUs this process may use)"))
+    # more threads than CPUs never helps the memory-bound kernel, but a
+    # script written for a big node must still run on a laptop; absurd counts
+    # are refused (a failed thread creation would end the interpreter
+    # inside OpenMP)
+    limit = max(256, 4 * _cpus())  # a script from a big node still runs on a laptop
+    return Param("n_threads", "int", 0, check=(lambda n: 0 <= n <= limit, f"in 0..{limit}"))
 
 
 class LBFluid(ParameterObject):
@@ -142,7 +142,10 @@ def _path(path):
     import os
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"LBFluid: path must be a string, got {type(path).__name__}")
-    return os.fspath(path)
+    path = os.fspath(path)
+    if not isinstance(path, str) or not path or "\0" in path:  # C would cut the name at a NUL
+        raise ValueError(f"LBFluid: path must be a non-empty file name without NUL characters, got {path!r}")
+    return path
 
 
 class LBFluidRoutines:

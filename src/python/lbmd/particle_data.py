@@ -1,6 +1,5 @@
 """Particles: ``system.part`` (add, by_id, by_ids, all, clear), handles to one
 particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API)."""
-import numbers
 
 import numpy as np
 
@@ -10,34 +9,19 @@ _SCALAR_PROPS = ("mass", "type", "mol_id")
 _ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
 
 
-#: ids, types and mol_ids are C++ ints; the largest id leaves room for max_id() + 1
-INT32_MAX = 2**31 - 1
-
-
-def _integers(owner, name, value, lo=0, hi=INT32_MAX):
-    """value (an integer or array of integers) as an int32 array, refused
-    (naming owner and parameter) when not integers or outside [lo, hi]:
-    no silent truncation of 1.7 or wrap-around of 2**40."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError):
-        arr = np.asarray(None, dtype=object)
-    if arr.dtype == object and arr.size:  # Python ints beyond int64, mixed lists
-        if all(isinstance(x, numbers.Integral) and not isinstance(x, bool) for x in arr.ravel()):
-            bad = [int(x) for x in arr.ravel() if not lo <= int(x) <= hi]
-            raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {bad[0]}")
-    if arr.size and arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.floor(arr)):
-        pass  # whole numbers stored as floats (np.zeros(n)) are fine; 1.7 is not
-    elif arr.size and (arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer)):
-        raise TypeError(f"{owner}: parameter '{name}' must be an integer or integers, got {value!r}")
-    if arr.size and (arr.min() < lo or arr.max() > hi):
-        bad = arr.min() if arr.min() < lo else arr.max()
-        raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {int(bad)}")
-    return np.ascontiguousarray(np.atleast_1d(arr).astype(np.int32))
+from .validation import INT32_MAX, integers as _integers
 
 
 def _ids_array(ids, owner="particles", name="id"):
     return _integers(owner, name, ids, 0, INT32_MAX - 1)
+
+
+def _one_id(owner, name, pid, hi=INT32_MAX - 1):
+    """One particle id: an integer of any numeric kind (np.int64, a 0-d
+    array, a whole float such as 1.0), refused when not whole or out of range."""
+    if np.ndim(pid) != 0 or isinstance(pid, (str, bytes)):
+        raise TypeError(f"{owner}: parameter '{name}' must be one particle id, got {pid!r}")
+    return int(_integers(owner, name, pid, 0, hi)[0])
 
 
 def _fix_to_mask(fix, n, what="ParticleList.add: parameter 'fix'"):
@@ -137,10 +121,8 @@ class ParticleHandle(_ParticleView):
         if not isinstance(bond, tuple) or len(bond) < 2:
             raise TypeError("add_bond: expected a tuple (bond, partner_id, ...)")
         ia, partners = bond[0], bond[1:]
-        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else p for p in partners]
-        for p in ids:
-            if isinstance(p, bool) or not isinstance(p, numbers.Integral):
-                raise TypeError(f"add_bond: partners must be particle ids or handles, got {p!r}")
+        ids = [self.id] + [p.id if isinstance(p, ParticleHandle) else _one_id("add_bond", "partner", p)
+                           for p in partners]
         ids = _ids_array(ids, "add_bond", "partner")
         self._system.bonded_inter._add_bonds(ia, ids.reshape(1, -1))
 
@@ -166,9 +148,7 @@ class ParticleHandle(_ParticleView):
     def _partner(self, what, pid):
         if isinstance(pid, ParticleHandle):
             pid = pid.id
-        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
-            raise TypeError(f"{what}: the partner must be a particle id or handle, got {pid!r}")
-        pid = int(_ids_array(pid, what, "partner")[0])
+        pid = _one_id(what, "partner", pid)
         if not self._core.exists(pid):
             raise ValueError(f"{what}: partner particle {pid} does not exist")
         if pid == self.id:
@@ -315,9 +295,7 @@ class ParticleList:
         return ParticleSlice(self._system, new_ids)
 
     def by_id(self, pid):
-        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
-            raise TypeError(f"by_id: parameter 'pid' must be an integer particle id, got {pid!r}")
-        return ParticleHandle(self._system, int(_ids_array(pid, "by_id", "pid")[0]))
+        return ParticleHandle(self._system, _one_id("by_id", "pid", pid))
 
     def by_ids(self, ids):
         ids = _ids_array(ids, "by_ids", "ids")
@@ -338,9 +316,8 @@ class ParticleList:
         return ParticleSlice(self._system, sl._ids[mask])
 
     def exists(self, pid):
-        if isinstance(pid, bool) or not isinstance(pid, numbers.Integral):
-            raise TypeError(f"exists: parameter 'pid' must be an integer particle id, got {pid!r}")
-        return 0 <= pid < INT32_MAX and bool(self._core.exists(int(pid)))
+        pid = _one_id("exists", "pid", pid, INT32_MAX)
+        return pid < INT32_MAX and bool(self._core.exists(pid))
 
     def clear(self):
         self._core.clear_particles()

@@ -104,6 +104,32 @@ def parse(owner, params, kwargs):
     return out
 
 
+#: ids, types and mol_ids are C++ ints; the largest id leaves room for max_id() + 1
+INT32_MAX = 2**31 - 1
+
+
+def integers(owner, name, value, lo=0, hi=INT32_MAX):
+    """value (an integer or array of integers) as an int32 array, refused
+    (naming owner and parameter) when not integers or outside [lo, hi]:
+    no silent truncation of 1.7 or wrap-around of 2**40."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError):
+        arr = np.asarray(None, dtype=object)
+    if arr.dtype == object and arr.size:  # Python ints beyond int64, mixed lists
+        if all(isinstance(x, numbers.Integral) and not isinstance(x, bool) for x in arr.ravel()):
+            bad = [int(x) for x in arr.ravel() if not lo <= int(x) <= hi]
+            raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {bad[0]}")
+    if arr.size and arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.floor(arr)):
+        pass  # whole numbers stored as floats (np.zeros(n)) are fine; 1.7 is not
+    elif arr.size and (arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer)):
+        raise TypeError(f"{owner}: parameter '{name}' must be an integer or integers, got {value!r}")
+    if arr.size and (arr.min() < lo or arr.max() > hi):
+        bad = arr.min() if arr.min() < lo else arr.max()
+        raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {int(bad)}")
+    return np.ascontiguousarray(np.atleast_1d(arr).astype(np.int32))
+
+
 # Range checks: (predicate, description)
 positive = (lambda x: x > 0, "> 0")
 non_negative = (lambda x: x >= 0, ">= 0")
