@@ -35,6 +35,32 @@ class MpiLauncher(unittest.TestCase):
         np.testing.assert_array_equal(pos2, pos)
         self.assertTrue(np.isfinite(energy))
 
+    def test_cell_output_outcome_shared_by_all_ranks(self):
+        """Only rank 0 writes cell files; a refused append must be refused on
+        every rank (before, only rank 0 raised and rank 1 read a file that
+        rank 0 was still replacing)."""
+        import os
+        import tempfile
+
+        import oif
+        comm = MPI.COMM_WORLD
+        folder = comm.bcast(tempfile.mkdtemp() if comm.Get_rank() == 0 else None, root=0)
+        s = lbmd.System(box_l=[40.0, 30.0, 30.0])
+        ct = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(3.0, 3.0, 3.0))
+        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[10, 15, 15])
+        for i in range(10):
+            name = os.path.join(folder, f"c{i}.vtk")
+            cell.output_vtk_pos(name)
+            cell.append_point_data_to_vtk(file_name=name, data_name="a", data=np.zeros(162),
+                                          first_append=True)
+            with self.assertRaisesRegex(ValueError, "already has a POINT_DATA section"):
+                cell.append_point_data_to_vtk(file_name=name, data_name="b", data=np.ones(162),
+                                              first_append=True)
+        comm.Barrier()
+        if comm.Get_rank() == 0:
+            with open(os.path.join(folder, "c9.vtk")) as f:
+                self.assertEqual(f.read().count("POINT_DATA"), 1)
+
     def test_world_size(self):
         self.assertGreaterEqual(MPI.COMM_WORLD.Get_size(), 1)
 

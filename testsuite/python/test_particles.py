@@ -250,6 +250,11 @@ class ParticleBadInput(unittest.TestCase):
         p = s.part.add(pos=[1, 1, 1])
         self.assertRaisesNaming(ValueError, "1e9 box lengths", setattr, p, "pos", [1, -1e11, 1])
         np.testing.assert_array_equal(p.pos, [1, 1, 1])
+        # one row of many refused: none of them added (before: the rows before it stayed)
+        self.assertRaisesNaming(ValueError, "1e9 box lengths", s.part.add, pos=[[2, 2, 2], [1e20, 0, 0]])
+        self.assertEqual(len(s.part), 1)
+        self.assertFalse(s.part.exists(-1))  # as in ESPResSo, not an error
+        self.assertEqual(len(s.part.by_ids(np.array([p.id], dtype=object))), 1)
 
     def test_blow_up_stops_with_the_particle_named(self):
         """k dt^2 / m = 250: the bond makes the pair explode. Stopped when a
@@ -258,6 +263,7 @@ class ParticleBadInput(unittest.TestCase):
         s = self.system
         s.time_step = 0.5
         s.part.add(pos=[[4, 5, 5], [6, 5, 5]])
+        s.part.add(pos=[1, 1, 1], v=[1e6, 0, 0], fix=[True, False, False])  # fast, but fixed in x
         h = HarmonicBond(k=1000.0, r_0=1.0)
         s.bonded_inter.add(h)
         s.part.by_id(0).add_bond((h, 1))

@@ -270,18 +270,26 @@ Energies System::compute_energies() {
 }
 
 void System::report_fast_particle(double dt) const {
+  // the particle that moved farthest in this step (fixed coordinates do not move)
   const auto& p = particles;
+  auto drift2 = [&](std::size_t i) {
+    double d2 = 0.0;
+    for (int d = 0; d < 3; ++d)
+      if (!(p.fixed[i] & (1u << d)))
+        d2 += dt * dt * p.vel[i][d] * p.vel[i][d];
+    return d2;
+  };
   std::size_t fastest = 0;
   for (std::size_t i = 1; i < p.n_local(); ++i)
-    if (p.vel[i].squaredNorm() > p.vel[fastest].squaredNorm())
+    if (drift2(i) > drift2(fastest))
       fastest = i;
   std::ostringstream msg;
   msg << "the integration is unstable: particle " << p.id[fastest] << " moved "
-      << dt * p.vel[fastest].norm() << " in one time step (more than half the box length "
-      << box.length().minCoeff() << ") to time " << time + dt << "; its velocity ("
-      << p.vel[fastest].transpose() << "), force (" << p.force[fastest].transpose()
+      << std::sqrt(drift2(fastest)) << " in one time step (more than half the box length, "
+      << 0.5 * box.length().minCoeff() << ") to time " << time + dt << ", velocity ("
+      << p.vel[fastest].transpose()
       << "). Reduce the time step or the stiffness of the interactions (bonds, membrane "
-         "moduli, contacts, coupling gamma)";
+         "moduli, contacts, coupling gamma). The positions are those after this step's drift";
   throw SimulationInstability(msg.str());
 }
 
@@ -437,7 +445,10 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
       try {
         interruption_point();
       } catch (...) {
+        // the state of a run that ended with this step: a later run goes
+        // on from here exactly as after run(k) (no force recomputation)
         second_kick();
+        mark_forces_valid();
         throw;
       }
     }

@@ -155,10 +155,11 @@ public:
   /** Throws SimulationInstability naming the fastest particle (a drift of
    *  more than half the box in one step of length dt). */
   [[noreturn]] void report_fast_particle(double dt) const;
-  /** Called by integrate every few steps, where the particles are as at the
-   *  end of a step; an exception it throws (the Python layer's
-   *  KeyboardInterrupt on Ctrl-C) ends the run there, as if it had been
-   *  asked for that many steps. Empty: never called. */
+  /** Called by integrate every 16 steps, where the particles are as at the
+   *  end of a step; an exception it throws ends the run there, in the state
+   *  of a run asked for that many steps (forces valid: a later run goes on
+   *  bit for bit as after a split run). The Python binding uses it for
+   *  Ctrl-C. Empty: never called. */
   std::function<void()> interruption_point;
   /** Recompute all forces for the current positions (no time advance). */
   void compute_forces();

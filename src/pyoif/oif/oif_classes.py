@@ -1051,34 +1051,38 @@ class OifCell:
             raise ValueError(f"{owner}: 'data' must have {n} values, got shape {data.shape}")
         if not isinstance(file_name, (str, os.PathLike)) or isinstance(file_name, bytes):
             raise TypeError(f"{owner}: parameter 'file_name' must be a string, got {type(file_name).__name__}")
-        if not os.path.isfile(file_name):
-            raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not an existing VTK file; write it "
-                             f"first with output_vtk_pos or output_vtk_pos_folded")
-        if not _vtk._is_writer():
-            return
-        with open(file_name, "r") as f:
-            text = f.read()
-        # the file's own structure decides: a second POINT_DATA header, or
-        # scalars without one, make a file that VTK readers reject
-        header = [ln for ln in text.splitlines() if ln.startswith("POINT_DATA")]
-        points = [ln for ln in text.splitlines() if ln.startswith("POINTS")]
-        if not points or points[0].split()[1:2] != [str(n)]:
-            raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not a VTK file of this cell's {n} nodes "
-                             f"(its POINTS line: {points[0] if points else 'missing'})")
-        if first_append and header:
-            raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has a POINT_DATA section; pass "
-                             f"first_append=False to add to it")
-        if not first_append and not header:
-            raise ValueError(f"{owner}: '{os.fspath(file_name)}' has no POINT_DATA section yet; pass "
-                             f"first_append=True for the first data")
-        if any(ln.split()[1:2] == [data_name] for ln in text.splitlines()
-               if ln.startswith(("SCALARS", "VECTORS"))):
-            raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has data named '{data_name}'")
-        with open(file_name, "a") as f:
-            if first_append:
-                f.write(f"POINT_DATA {n}\n")
-            f.write(f"SCALARS {data_name} double 1\nLOOKUP_TABLE default\n")
-            f.write("\n".join(repr(float(v)) for v in data) + "\n")
+        # the file's checks and the append on the writing rank, its outcome on
+        # every rank (under MPI the other ranks would race with its writes)
+        def append():
+            if not os.path.isfile(file_name):
+                raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not an existing VTK file; write it "
+                                 f"first with output_vtk_pos or output_vtk_pos_folded")
+            with open(file_name, "r") as f:
+                text = f.read()
+            # the file's own structure decides: a second POINT_DATA header, or
+            # scalars without one, make a file that VTK readers reject
+            header = [ln for ln in text.splitlines() if ln.startswith("POINT_DATA")]
+            points = [ln for ln in text.splitlines() if ln.startswith("POINTS")]
+            if not points or points[0].split()[1:2] != [str(n)]:
+                raise ValueError(f"{owner}: '{os.fspath(file_name)}' is not a VTK file of this cell's "
+                                 f"{n} nodes "
+                                 f"(its POINTS line: {points[0] if points else 'missing'})")
+            if first_append and header:
+                raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has a POINT_DATA section; pass "
+                                 f"first_append=False to add to it")
+            if not first_append and not header:
+                raise ValueError(f"{owner}: '{os.fspath(file_name)}' has no POINT_DATA section yet; pass "
+                                 f"first_append=True for the first data")
+            if any(ln.split()[1:2] == [data_name] for ln in text.splitlines()
+                   if ln.startswith(("SCALARS", "VECTORS"))):
+                raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has data named '{data_name}'")
+            with open(file_name, "a") as f:
+                if first_append:
+                    f.write(f"POINT_DATA {n}\n")
+                f.write(f"SCALARS {data_name} double 1\nLOOKUP_TABLE default\n")
+                f.write("\n".join(repr(float(v)) for v in data) + "\n")
+
+        _vtk.on_writer(append)
 
     def output_raw_data(self, file_name=None, data=None):
         if file_name is None or data is None:

@@ -16,6 +16,29 @@ def _is_writer():
         return True
 
 
+def on_writer(action):
+    """Run action() on the writing rank only; an exception it raises is
+    raised on every rank, so that all ranks of an SPMD script see the same
+    outcome (a rank that raised alone would leave the others waiting)."""
+    try:
+        from mpi4py import MPI
+        comm = MPI.COMM_WORLD
+    except ImportError:  # pragma: no cover
+        comm = None
+    if comm is None or comm.Get_size() == 1:
+        action()
+        return
+    error = None
+    if comm.Get_rank() == 0:
+        try:
+            action()
+        except Exception as e:  # handed to every rank below
+            error = e
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise error
+
+
 def _check_name(name):
     if not isinstance(name, str) or not name or any(c.isspace() for c in name):
         raise ValueError(f"VTK output: data name must be a non-empty string without spaces, got {name!r}")
@@ -62,21 +85,23 @@ def write_text(path, text, owner="output"):
     over the target at the end (readers never see a half-written file); the
     temporary file is removed on any failure."""
     real = output_path(path, owner)
-    if not _is_writer():
-        return
-    tmp = real + ".tmp"
-    try:
-        with open(tmp, "w") as f:
-            f.write(text)
-        os.replace(tmp, real)
-    except OSError as e:
-        raise OSError(f"{owner}: cannot write '{path}': {e.strerror or e}") from None
-    finally:
-        if os.path.lexists(tmp) and os.path.isfile(tmp):
-            try:
-                os.remove(tmp)
-            except OSError:  # pragma: no cover - the original error is the one to report
-                pass
+
+    def write():
+        tmp = real + ".tmp"
+        try:
+            with open(tmp, "w") as f:
+                f.write(text)
+            os.replace(tmp, real)
+        except OSError as e:
+            raise OSError(f"{owner}: cannot write '{path}': {e.strerror or e}") from None
+        finally:
+            if os.path.lexists(tmp) and os.path.isfile(tmp):
+                try:
+                    os.remove(tmp)
+                except OSError:  # pragma: no cover - the original error is the one to report
+                    pass
+
+    on_writer(write)
 
 
 def format_rows(values, integer=False):
@@ -115,7 +140,8 @@ def write_polydata(path, points, polygons=None, lines=None, point_data=None, tit
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     arrays = _point_arrays(point_data, n)
-    if not _is_writer():
+    if not _is_writer():  # the other ranks only share the writer's outcome
+        write_text(path, "", "VTK output")
         return
     out = [f"# vtk DataFile Version 3.0\n{title}\nASCII\nDATASET POLYDATA\n", f"POINTS {n} double\n"]
     if n:

@@ -9,7 +9,9 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <csignal>
 #include <limits>
+#include <signal.h>
 #include <string>
 
 namespace py = pybind11;
@@ -17,6 +19,34 @@ namespace py = pybind11;
 namespace pyoif::python {
 
 namespace {
+
+/** While alive, SIGINT only sets a flag (read by pending()); the previous
+ *  disposition (Python's handler) comes back with restore() or at the end. */
+class SigintNote {
+public:
+  SigintNote() {
+    s_flag = 0;
+    struct sigaction ours {};
+    ours.sa_handler = &SigintNote::note;
+    sigemptyset(&ours.sa_mask);
+    m_active = sigaction(SIGINT, &ours, &m_previous) == 0;
+  }
+  ~SigintNote() { restore(); }
+  SigintNote(const SigintNote&) = delete;
+  SigintNote& operator=(const SigintNote&) = delete;
+  void restore() {
+    if (m_active)
+      sigaction(SIGINT, &m_previous, nullptr);
+    m_active = false;
+  }
+  static bool pending() { return s_flag != 0; }
+
+private:
+  static void note(int) { s_flag = 1; }
+  static inline volatile std::sig_atomic_t s_flag = 0;
+  struct sigaction m_previous {};
+  bool m_active = false;
+};
 
 using IdArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -184,11 +214,20 @@ IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const
   auto fix_r = fixed.unchecked<1>();
   IdArray out(n);
   auto w = out.mutable_unchecked<1>();
-  for (py::ssize_t i = 0; i < n; ++i)
-    w(i) =
-        s.add_particle(id_r(i), Vec3(p_r(i, 0), p_r(i, 1), p_r(i, 2)),
-                       Vec3(v_r(i, 0), v_r(i, 1), v_r(i, 2)), m_r(i), t_r(i), mol_r(i),
-                       Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)), static_cast<std::uint8_t>(fix_r(i)));
+  // all or nothing: a row refused (or memory running out) part way through
+  // takes the particles of this call out again
+  py::ssize_t added = 0;
+  try {
+    for (py::ssize_t i = 0; i < n; ++i, ++added)
+      w(i) = s.add_particle(id_r(i), Vec3(p_r(i, 0), p_r(i, 1), p_r(i, 2)),
+                            Vec3(v_r(i, 0), v_r(i, 1), v_r(i, 2)), m_r(i), t_r(i), mol_r(i),
+                            Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)),
+                            static_cast<std::uint8_t>(fix_r(i)));
+  } catch (...) {
+    for (py::ssize_t i = added - 1; i >= 0; --i)
+      s.remove_particle(w(i));
+    throw;
+  }
   return out;
 }
 
@@ -275,26 +314,50 @@ void bind_system(py::module_& m) {
       .def_property_readonly("langevin", [](const System& s) { return s.langevin(); })
       // integration
       // The run keeps the GIL: no other Python thread can change the system
-      // under it (a part.clear() from a second thread would free the
-      // particles the loop is using), and Ctrl-C is seen every 16 steps
-      // (one rank only: under MPI a rank leaving alone would hang the others).
+      // under it. With `interruptible` (the caller checked: main thread, one
+      // MPI rank, a Python SIGINT handler in place) Ctrl-C only sets a flag
+      // during the run; every 16 steps the loop stops if it is set, in a
+      // consistent state, and the Python handler then runs between steps
+      // (KeyboardInterrupt by default; a handler that returns lets the run
+      // go on). No Python code runs in the middle of a step.
       .def(
           "integrate",
-          [](System& s, int steps, bool recalc_forces, bool reuse_forces) {
-            if (s.comm.size() == 1)
-              s.interruption_point = [] {
-                if (PyErr_CheckSignals() != 0)
-                  throw py::error_already_set();
-              };
-            try {
+          [](System& s, int steps, bool recalc_forces, bool reuse_forces, bool interruptible) {
+            if (!interruptible) {
               s.integrate(steps, recalc_forces, reuse_forces);
-            } catch (...) {
-              s.interruption_point = nullptr;
-              throw;
+              return;
             }
-            s.interruption_point = nullptr;
+            struct Interrupted {};
+            int remaining = steps;
+            while (true) {
+              SigintNote note; // our C handler while the loop runs
+              s.interruption_point = [] {
+                if (SigintNote::pending())
+                  throw Interrupted{};
+              };
+              const std::uint64_t start = s.step_count;
+              try {
+                s.integrate(remaining, recalc_forces, reuse_forces);
+                s.interruption_point = nullptr;
+                return;
+              } catch (const Interrupted&) {
+                s.interruption_point = nullptr;
+              } catch (...) {
+                s.interruption_point = nullptr;
+                throw;
+              }
+              remaining -= static_cast<int>(s.step_count - start);
+              recalc_forces = reuse_forces = false; // the forces are those of the last step
+              note.restore();
+              // the signal, handed to Python's own machinery now that the
+              // state is consistent: its handler runs here
+              PyErr_SetInterrupt();
+              if (PyErr_CheckSignals() != 0)
+                throw py::error_already_set();
+            }
           },
-          py::arg("steps"), py::arg("recalc_forces") = false, py::arg("reuse_forces") = false)
+          py::arg("steps"), py::arg("recalc_forces") = false, py::arg("reuse_forces") = false,
+          py::arg("interruptible") = false)
       .def("compute_forces", &System::compute_forces)
       .def("energies",
            [](System& s) {

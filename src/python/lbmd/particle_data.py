@@ -316,6 +316,13 @@ class ParticleList:
         return ParticleSlice(self._system, sl._ids[mask])
 
     def exists(self, pid):
+        """Whether particle pid exists (False for any negative or too large id)."""
+        if np.ndim(pid) == 0 and not isinstance(pid, (str, bytes, bool, np.bool_)):
+            try:
+                if np.isfinite(pid) and (pid < 0 or pid > INT32_MAX):
+                    return False
+            except TypeError:
+                pass  # not a number: _one_id names it
         pid = _one_id("exists", "pid", pid, INT32_MAX)
         return pid < INT32_MAX and bool(self._core.exists(pid))
 

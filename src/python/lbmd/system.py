@@ -59,10 +59,22 @@ class Integrator:
                                      Param("recalc_forces", "bool"), Param("reuse_forces", "bool")],
                   {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces})
         self._system._check_ready()
-        self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"])
+        self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"], _interruptible())
 
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
+
+
+def _interruptible():
+    """Whether a run may stop for Ctrl-C between steps: Python handles
+    signals in the main thread only; under MPI one rank leaving alone would
+    hang the others (mpirun ends the job instead); a script that ignores
+    SIGINT, or left it to the default action, keeps that."""
+    import signal
+    import threading
+    from mpi4py import MPI
+    return (threading.current_thread() is threading.main_thread() and MPI.COMM_WORLD.Get_size() == 1
+            and callable(signal.getsignal(signal.SIGINT)))
 
 
 class Thermostat:

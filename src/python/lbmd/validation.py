@@ -119,7 +119,9 @@ def integers(owner, name, value, lo=0, hi=INT32_MAX):
     if arr.dtype == object and arr.size:  # Python ints beyond int64, mixed lists
         if all(isinstance(x, numbers.Integral) and not isinstance(x, bool) for x in arr.ravel()):
             bad = [int(x) for x in arr.ravel() if not lo <= int(x) <= hi]
-            raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {bad[0]}")
+            if bad:
+                raise ValueError(f"{owner}: parameter '{name}' must be integers in {lo}..{hi}, got {bad[0]}")
+            arr = arr.astype(np.int64)
     if arr.size and arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.floor(arr)):
         pass  # whole numbers stored as floats (np.zeros(n)) are fine; 1.7 is not
     elif arr.size and (arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer)):
