@@ -1070,12 +1070,84 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
     largest_nodes = std::max<std::size_t>(largest_nodes, r.node_end - r.node_begin);
     largest_tri = std::max<std::size_t>(largest_tri, r.triangle_end - r.triangle_begin);
   }
+  share_cell_tables();
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
   m_tri_edge.assign(2 * largest_tri, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_f.resize(n_slots);
   m_normal.resize(n_slots);
   return true;
+}
+
+void FusedMembranePlan::share_cell_tables() {
+  // Cells of one OifCellType have the same triangles and edges as cell-local
+  // node indices, and the same reference values: they share one copy of
+  // these tables, which the pass then reads from L1/L2 for every cell
+  // instead of streaming a copy per cell through L3, where it competes with
+  // the lattice (at 60 cells the copies were about 4 MB). A cell whose tables
+  // differ in any bit keeps its own. The arithmetic is unchanged.
+  std::vector<int> tv0, tv1, tv2, eb, ea, ec, ed;
+  std::vector<double> tw, ta, er0, einv, ecos, esin;
+  std::vector<std::size_t> templates; // cells whose tables were copied
+  auto same = [](const auto& old_table, int old_begin, const auto& new_table, int new_begin,
+                 int n) {
+    return n == 0 || std::memcmp(old_table.data() + old_begin, new_table.data() + new_begin,
+                                 sizeof(old_table[0]) * static_cast<std::size_t>(n)) == 0;
+  };
+  for (std::size_t c = 0; c < m_cells.size(); ++c) {
+    CellRange& r = m_cells[c];
+    const int nt = r.triangle_end - r.triangle_begin, ne = r.edge_end - r.edge_begin;
+    const CellRange* match = nullptr;
+    for (std::size_t t : templates) {
+      const CellRange& q = m_cells[t]; // already pointing into the new tables
+      if (q.triangle_end - q.triangle_begin != nt || q.edge_end - q.edge_begin != ne)
+        continue;
+      const int a = r.triangle_begin, b = q.triangle_begin, e = r.edge_begin, f = q.edge_begin;
+      if (same(m_tri_v0, a, tv0, b, nt) && same(m_tri_v1, a, tv1, b, nt) &&
+          same(m_tri_v2, a, tv2, b, nt) && same(m_tri_weight, a, tw, b, nt) &&
+          same(m_tri_area0, a, ta, b, nt) && same(m_edge_b, e, eb, f, ne) &&
+          same(m_edge_a, e, ea, f, ne) && same(m_edge_c, e, ec, f, ne) &&
+          same(m_edge_d, e, ed, f, ne) && same(m_edge_r0, e, er0, f, ne) &&
+          same(m_edge_inv_r0, e, einv, f, ne) && same(m_edge_cos_psi0, e, ecos, f, ne) &&
+          same(m_edge_sin_psi0, e, esin, f, ne)) {
+        match = &q;
+        break;
+      }
+    }
+    if (match) {
+      r.triangle_begin = match->triangle_begin;
+      r.triangle_end = match->triangle_end;
+      r.edge_begin = match->edge_begin;
+      r.edge_end = match->edge_end;
+      continue;
+    }
+    auto append = [](auto& to, const auto& from, int begin, int n) {
+      to.insert(to.end(), from.begin() + begin, from.begin() + begin + n);
+    };
+    const int new_t = static_cast<int>(tv0.size()), new_e = static_cast<int>(eb.size());
+    for (auto [to, from] : {std::pair{&tv0, &m_tri_v0}, {&tv1, &m_tri_v1}, {&tv2, &m_tri_v2}})
+      append(*to, *from, r.triangle_begin, nt);
+    for (auto [to, from] : {std::pair{&tw, &m_tri_weight}, {&ta, &m_tri_area0}})
+      append(*to, *from, r.triangle_begin, nt);
+    for (auto [to, from] :
+         {std::pair{&eb, &m_edge_b}, {&ea, &m_edge_a}, {&ec, &m_edge_c}, {&ed, &m_edge_d}})
+      append(*to, *from, r.edge_begin, ne);
+    for (auto [to, from] : {std::pair{&er0, &m_edge_r0},
+                            {&einv, &m_edge_inv_r0},
+                            {&ecos, &m_edge_cos_psi0},
+                            {&esin, &m_edge_sin_psi0}})
+      append(*to, *from, r.edge_begin, ne);
+    r.triangle_begin = new_t;
+    r.triangle_end = new_t + nt;
+    r.edge_begin = new_e;
+    r.edge_end = new_e + ne;
+    templates.push_back(c);
+  }
+  m_tri_v0.swap(tv0), m_tri_v1.swap(tv1), m_tri_v2.swap(tv2);
+  m_tri_weight.swap(tw), m_tri_area0.swap(ta);
+  m_edge_b.swap(eb), m_edge_a.swap(ea), m_edge_c.swap(ec), m_edge_d.swap(ed);
+  m_edge_r0.swap(er0), m_edge_inv_r0.swap(einv), m_edge_cos_psi0.swap(ecos),
+      m_edge_sin_psi0.swap(esin);
 }
 
 bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,

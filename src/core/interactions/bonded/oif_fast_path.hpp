@@ -292,6 +292,9 @@ private:
     int origin; ///< cell-local index of the volume's reference point
   };
   std::vector<CellRange> m_cells;
+  /** Cells with identical triangle and edge tables point to one copy
+   *  (their ranges rewritten); called at the end of a build. */
+  void share_cell_tables();
   std::vector<int> m_index;    ///< slot -> local particle index
   std::vector<int> m_slot_mol; ///< slot -> mol_id at build
   // triangles (global group order within a cell), vertices as cell-local
