@@ -303,10 +303,9 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
         // between updates, tau > time_step) stay with the nodes that remain
         // fluid; on a node turned solid they are dropped (the wall takes
         // them, as it takes every deposit on a solid node). A node that was
-        // solid may hold such old deposits, which no update read: cleared.
-        if (!m_field.empty() && (old_flag[n] != 0 || m_flag[n] != 0))
-          for (int d = 0; d < 3; ++d)
-            m_field[3 * n + d] = 0.0;
+        // solid may hold such old deposits, which no update read: dropped.
+        if (!m_field_valid.empty() && (old_flag[n] != 0 || m_flag[n] != 0))
+          m_field_valid[n >> 6] &= ~(std::uint64_t{1} << (n & 63));
       }
   rebuild_geometry();
 }
@@ -458,7 +457,7 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
 void LBFluid::open_impulse_field() {
   if (m_field.empty()) {
     m_field.assign(3 * m_stride, 0.0);
-    m_field_chunk.assign((m_stride >> field_chunk_bits) + 1, 0);
+    m_field_valid.assign((m_stride >> 6) + 2, 0); // + 1 spare: field_valid_bits32
   }
   m_field_used = true;
 }
@@ -507,9 +506,10 @@ Vec3 LBFluid::total_momentum() const {
         j[d] += c[q][d] * s;
     }
     if (m_field_used)
-      for (int d = 0; d < 3; ++d)
-        for (int i = 0; i < r.length; ++i)
-          j[d] += m_field[3 * (r.start + i) + d];
+      for (int i = 0; i < r.length; ++i)
+        if (field_valid(r.start + i))
+          for (int d = 0; d < 3; ++d)
+            j[d] += m_field[3 * (r.start + i) + d];
   }
   return j * std::pow(m_p.agrid, 4) / m_p.tau - m_ledger.in_flight;
 }

@@ -162,10 +162,18 @@ public:
   }
   void add_field_impulse(std::size_t n, const Vec3& p) {
     double* g = m_field.data() + 3 * n;
-    g[0] += p[0];
-    g[1] += p[1];
-    g[2] += p[2];
-    m_field_chunk[n >> field_chunk_bits] = 1;
+    std::uint64_t& word = m_field_valid[n >> 6];
+    const std::uint64_t bit = std::uint64_t{1} << (n & 63);
+    if (word & bit) {
+      g[0] += p[0];
+      g[1] += p[1];
+      g[2] += p[2];
+    } else { // the node's first deposit of this update interval
+      g[0] = p[0];
+      g[1] = p[1];
+      g[2] = p[2];
+      word |= bit;
+    }
   }
   /** Requests the field line of padded index n (a later add_field_impulse). */
   void prefetch_field(std::size_t n) const { __builtin_prefetch(m_field.data() + 3 * n, 1, 3); }
@@ -296,14 +304,25 @@ private:
   double* m_f = nullptr;  ///< populations, 19 * stride, updated in place
   bool m_swapped = false; ///< after an odd number of updates (see top)
   /// force density of the particle coupling, 3 components per node
-  /// (node-major: one cache line per deposit; the kernel reads it per block)
+  /// (node-major: one cache line per deposit; the kernel reads it per block).
+  /// A node's entry holds a deposit only where its bit in m_field_valid is
+  /// set; elsewhere it is stale and nobody reads it. So neither the update
+  /// nor anything else clears the field itself: the first deposit of an
+  /// update interval overwrites, the update reads only marked nodes, and
+  /// clearing the bits (a bit per node, 1/192 of the field) resets it.
   std::vector<double> m_field;
+  std::vector<std::uint64_t> m_field_valid;
   bool m_field_used = false;
-  /// one flag per chunk of 2^field_chunk_bits padded nodes: some node of the
-  /// chunk has a deposit in m_field (the update reads and clears only those
-  /// blocks, so a few cells in a large box cost little)
-  static constexpr int field_chunk_bits = 6;
-  std::vector<std::uint8_t> m_field_chunk;
+  /** The bits of m_field_valid for the padded nodes n .. n + 31 (bit i: n + i). */
+  std::uint32_t field_valid_bits32(std::size_t n) const {
+    const std::size_t word = n >> 6;
+    const unsigned shift = static_cast<unsigned>(n & 63);
+    std::uint64_t bits = m_field_valid[word] >> shift;
+    if (shift > 32) // the block reaches into the next word (one spare word at the end)
+      bits |= m_field_valid[word + 1] << (64 - shift);
+    return static_cast<std::uint32_t>(bits);
+  }
+  bool field_valid(std::size_t n) const { return (m_field_valid[n >> 6] >> (n & 63)) & 1u; }
   std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)
   std::vector<BoundarySpec> m_boundaries;
   std::vector<Run> m_runs;

@@ -189,10 +189,8 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
     write[q] = read[opposite(q)];
   const Relaxation l = m_relax;
   const double fx = m_ext_lattice[0], fy = m_ext_lattice[1], fz = m_ext_lattice[2];
-  // the coupling's force field is read once and cleared in the same pass
-  // (solid nodes keep theirs, which nothing reads; set_boundaries clears them)
-  double* __restrict g = with_field ? m_field.data() : nullptr;
-  const std::uint8_t* chunk = with_field ? m_field_chunk.data() : nullptr;
+  // the coupling's force field, read at the nodes marked valid (see m_field)
+  const double* __restrict g = with_field ? m_field.data() : nullptr;
   const std::size_t begin = r.start, end = r.start + r.length;
   // a node out of range: its moments, recomputed from the populations that
   // are still unwritten (the caller throws, the update is abandoned)
@@ -211,6 +209,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
     // unstable node is reported with its pre-collision state. The write-back
     // goes to the lines just read (still in L1/L2).
     constexpr int block = 32;
+    static_assert(block == 32, "field_valid_bits32 gives the field's marks of 32 nodes");
     // the hardware prefetcher does not keep 19 streams far enough ahead:
     // request the rows `distance` nodes ahead into L2 (in the next run when
     // this one ends; runs are in memory order)
@@ -231,17 +230,20 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         force[1][i] = fy;
         force[2][i] = fz;
       }
-      // only chunks that received a deposit hold a non-zero field
-      if (with_field &&
-          (chunk[b0 >> field_chunk_bits] | chunk[(b0 + len - 1) >> field_chunk_bits])) {
-        double* __restrict gb = g + 3 * b0;
-        for (int i = 0; i < len; ++i) {
-          force[0][i] += gb[3 * i];
-          force[1][i] += gb[3 * i + 1];
-          force[2][i] += gb[3 * i + 2];
+      // only nodes that received a deposit: a block without any reads nothing
+      if (with_field) {
+        std::uint32_t valid = field_valid_bits32(b0);
+        if (len < block)
+          valid &= (std::uint32_t{1} << len) - 1u;
+        if (valid) {
+          const double* __restrict gb = g + 3 * b0;
+          for (int i = 0; i < len; ++i) {
+            const bool marked = (valid >> i) & 1u;
+            force[0][i] += marked ? gb[3 * i] : 0.0;
+            force[1][i] += marked ? gb[3 * i + 1] : 0.0;
+            force[2][i] += marked ? gb[3 * i + 2] : 0.0;
+          }
         }
-        for (int i = 0; i < 3 * len; ++i)
-          gb[i] = 0.0;
       }
       const double* in[Q];
       for (int q = 0; q < Q; ++q)
@@ -286,12 +288,9 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
       for (int q = 0; q < Q; ++q)
         fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
       double F[3] = {fx, fy, fz};
-      if (with_field && chunk[n >> field_chunk_bits]) {
-        for (int d = 0; d < 3; ++d) {
+      if (with_field && field_valid(n))
+        for (int d = 0; d < 3; ++d)
           F[d] += g[3 * n + d];
-          g[3 * n + d] = 0.0;
-        }
-      }
       const NodeResult res = collide<false>(fn, F, l, out);
       if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
         return record_bad(n, F);
@@ -478,8 +477,8 @@ void LBFluid::step() {
   m_swapped = even;
   halo_exchange(f, even);
   apply_bounce_back(f);
-  if (field) { // the kernel cleared the field of every fluid node in a marked chunk
-    std::fill(m_field_chunk.begin(), m_field_chunk.end(), std::uint8_t{0});
+  if (field) { // every deposit is used: the field is empty again
+    std::fill(m_field_valid.begin(), m_field_valid.end(), std::uint64_t{0});
     m_field_used = false;
   }
   ++m_updates;
