@@ -47,12 +47,14 @@ import lbmd.lbboundaries
 import lbmd.shapes
 
 
-def make(kT=0.0, dens=50.0):
-    system = lbmd.System(box_l=[8.0, 8.0, 8.0])
-    system.time_step = 0.01
-    lbf = lbmd.lb.LBFluid(agrid=1.0, dens=dens, visc=3.0, tau=0.05, kT=kT, seed=3)
+def make(kT=0.0, dens=50.0, box=(8.0, 8.0, 8.0), time_step=0.01, visc=3.0, tau=0.05, gamma=2.0,
+         periodicity=(True, True, True)):
+    """A system with a fluid (agrid 1) coupled to its particles."""
+    system = lbmd.System(box_l=list(box), periodicity=list(periodicity))
+    system.time_step = time_step
+    lbf = lbmd.lb.LBFluid(agrid=1.0, dens=dens, visc=visc, tau=tau, kT=kT, seed=3)
     system.actors.add(lbf)
-    system.thermostat.set_lb(LB_fluid=lbf, gamma=2.0, seed=7)
+    system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma, seed=7)
     return system, lbf
 
 
@@ -137,11 +139,7 @@ class Coupling(unittest.TestCase):
         # field; a boundary added then must not drop them. The new solid node
         # is in a corner the particle's disturbance cannot reach in the two
         # updates of the test, so particle + fluid momentum stays exact.
-        system = lbmd.System(box_l=[12.0, 12.0, 12.0])
-        system.time_step = 0.01
-        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=3.0, tau=0.05)
-        system.actors.add(lbf)
-        system.thermostat.set_lb(LB_fluid=lbf, gamma=2.0)
+        system, lbf = make(dens=1.0, box=(12.0, 12.0, 12.0))
         m, v0 = 1.0, np.array([0.2, -0.1, 0.05])
         system.part.add(pos=[6.2, 5.9, 6.1], v=v0, mass=m)
         p0 = system.analysis.linear_momentum()
@@ -158,11 +156,7 @@ class Coupling(unittest.TestCase):
         self.check_momentum(1e-3)
 
     def test_deposits_reach_populations(self):
-        system = lbmd.System(box_l=[12.0, 10.0, 8.0])
-        system.time_step = 0.05
-        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.05)
-        system.actors.add(lbf)
-        system.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+        system, lbf = make(dens=1.0, box=(12.0, 10.0, 8.0), time_step=0.05, visc=1.0, gamma=1.0)
         rng = np.random.default_rng(5)
         for _ in range(25):
             system.part.add(pos=rng.uniform(0.0, 1.0, 3) * system.box_l, v=rng.normal(0.0, 0.5, 3))
@@ -180,12 +174,8 @@ class Coupling(unittest.TestCase):
         self.assertGreater(np.linalg.norm(populations), 0.3 * np.linalg.norm(p0))
 
     def test_force_uses_interpolated_velocity(self):
-        system = lbmd.System(box_l=[12.0, 10.0, 8.0])
-        system.time_step = 0.05
-        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.05)
-        system.actors.add(lbf)
         gamma = 1.5
-        system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
+        system, lbf = make(dens=1.0, box=(12.0, 10.0, 8.0), time_step=0.05, visc=1.0, gamma=gamma)
         x, y, z = (np.indices((12, 10, 8)) + 0.5)
         lbf[:, :, :].velocity = np.stack([0.9 * np.sin(2 * np.pi * y / 10), 0.6 * np.cos(2 * np.pi * z / 8),
                                           0.75 * np.sin(2 * np.pi * x / 12)], axis=-1)
@@ -217,13 +207,11 @@ class Coupling(unittest.TestCase):
         particle at z = 12.7 coupled to the fluid on the wrapped side
         (before); now the run stops naming it, and once it is moved back the
         coupling goes on from a consistent node list."""
-        system = lbmd.System(box_l=[8.0, 8.0, 8.0], periodicity=[True, True, False])
-        system.time_step = 0.1
-        lbf = system.actors.add(lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1))
+        system, lbf = make(dens=1.0, time_step=0.1, visc=1.0, tau=0.1, gamma=1.0,
+                           periodicity=(True, True, False))
         for normal, dist in (([0, 0, 1], 0.5), ([0, 0, -1], -7.5)):
             system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
                 shape=lbmd.shapes.Wall(normal=normal, dist=dist)))
-        system.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
         system.part.add(pos=[[2.0, 2.0, 3.0], [4.0, 4.0, 4.0]])
         system.integrator.run(3)
         p = system.part.add(pos=[3.0, 3.0, 12.7], v=[0.01, 0, 0])

@@ -21,10 +21,6 @@ using namespace d3q19;
 
 namespace {
 
-std::string fmt(double x) {
-  return format_number(x);
-}
-
 void require(bool ok, const std::string& msg) {
   if (!ok)
     throw InputError(msg);
@@ -42,7 +38,7 @@ double* allocate(std::size_t n) {
 /** lambda = 1 - omega, with omega checked to lie in (0, 2). */
 double lambda_of(double omega, const std::string& what) {
   require(std::isfinite(omega) && omega > 0.0 && omega < 2.0,
-          what + ": the relaxation rate " + fmt(omega) +
+          what + ": the relaxation rate " + format_number(omega) +
               " lies outside the open range (0, 2); choose another value");
   return 1.0 - omega;
 }
@@ -57,14 +53,17 @@ double equilibrium(int q, double rho, const Vec3& u) {
 
 LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.length()) {
   auto finite_positive = [](double x) { return std::isfinite(x) && x > 0.0; };
-  require(finite_positive(p.agrid), "agrid must be a finite number > 0, got " + fmt(p.agrid));
-  require(finite_positive(p.tau), "tau must be a finite number > 0, got " + fmt(p.tau));
-  require(finite_positive(p.density), "dens must be a finite number > 0, got " + fmt(p.density));
+  require(finite_positive(p.agrid),
+          "agrid must be a finite number > 0, got " + format_number(p.agrid));
+  require(finite_positive(p.tau), "tau must be a finite number > 0, got " + format_number(p.tau));
+  require(finite_positive(p.density),
+          "dens must be a finite number > 0, got " + format_number(p.density));
   require(finite_positive(p.viscosity),
-          "visc must be a finite number > 0, got " + fmt(p.viscosity));
+          "visc must be a finite number > 0, got " + format_number(p.viscosity));
   require(finite_positive(p.bulk_viscosity),
-          "bulk_visc must be a finite number > 0, got " + fmt(p.bulk_viscosity));
-  require(std::isfinite(p.kT) && p.kT >= 0.0, "kT must be a finite number >= 0, got " + fmt(p.kT));
+          "bulk_visc must be a finite number > 0, got " + format_number(p.bulk_viscosity));
+  require(std::isfinite(p.kT) && p.kT >= 0.0,
+          "kT must be a finite number >= 0, got " + format_number(p.kT));
   require(p.ext_force_density.allFinite(), "ext_force_density must be finite");
   require(p.n_threads >= 0, "n_threads must be >= 0 (0: OMP_NUM_THREADS or 1)");
 
@@ -72,11 +71,11 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
     const double cells = m_box[d] / p.agrid;
     const double rounded = std::round(cells);
     require(rounded >= 1.0 && std::abs(cells - rounded) <= 1e-9 * std::max(1.0, rounded),
-            "agrid " + fmt(p.agrid) + " does not divide the box length " + fmt(m_box[d]) +
-                " on axis " + std::to_string(d) + " (box_l / agrid = " + fmt(cells) +
-                " must be a positive integer)");
+            "agrid " + format_number(p.agrid) + " does not divide the box length " +
+                format_number(m_box[d]) + " on axis " + std::to_string(d) +
+                " (box_l / agrid = " + format_number(cells) + " must be a positive integer)");
     // a padded axis must fit an int (the indices and offsets are ints)
-    require(rounded <= 1e8, "agrid " + fmt(p.agrid) + " gives " + fmt(rounded) +
+    require(rounded <= 1e8, "agrid " + format_number(p.agrid) + " gives " + format_number(rounded) +
                                 " lattice nodes on axis " + std::to_string(d) +
                                 "; a lattice that fine cannot be stored");
     m_n[d] = static_cast<int>(rounded);
@@ -87,7 +86,7 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
     // allocation whose size wrapped around) when it exceeds 2^50 bytes
     const double padded = double(m_pad[0]) * m_pad[1] * m_pad[2];
     require(padded * (Q * sizeof(double) + 2) < std::ldexp(1.0, 50),
-            "the lattice of " + fmt(double(m_n[0]) * m_n[1] * m_n[2]) +
+            "the lattice of " + format_number(double(m_n[0]) * m_n[1] * m_n[2]) +
                 " nodes (box / agrid) needs more than 2^50 bytes; use a larger agrid");
   }
 
@@ -96,8 +95,9 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
   const double nu = p.viscosity * p.tau / (p.agrid * p.agrid);
   const double nu_b = p.bulk_viscosity * p.tau / (p.agrid * p.agrid);
   const double omega_s = 1.0 / (3.0 * nu + 0.5);
-  m_relax.shear = lambda_of(omega_s, "visc (shear relaxation, visc * tau / agrid^2 = " + fmt(nu) +
-                                         " in lattice units)");
+  m_relax.shear =
+      lambda_of(omega_s, "visc (shear relaxation, visc * tau / agrid^2 = " + format_number(nu) +
+                             " in lattice units)");
   switch (p.collision) {
   case Collision::mrt:
     m_relax.bulk = lambda_of(2.0 / (9.0 * nu_b + 1.0), "bulk_visc (bulk relaxation)");
@@ -242,18 +242,18 @@ void LBFluid::validate(const BoxGeometry& box, double time_step) const {
   for (int d = 0; d < 3; ++d) {
     const double cells = box.length()[d] / m_p.agrid;
     require(std::abs(cells - std::round(cells)) <= 1e-9 * std::max(1.0, cells) && cells >= 0.5,
-            "agrid " + fmt(m_p.agrid) + " does not divide the box length " + fmt(box.length()[d]) +
-                " on axis " + std::to_string(d));
+            "agrid " + format_number(m_p.agrid) + " does not divide the box length " +
+                format_number(box.length()[d]) + " on axis " + std::to_string(d));
     require(static_cast<int>(std::round(cells)) == m_n[d],
             "box_l changed after the fluid was created (axis " + std::to_string(d) + ": " +
                 std::to_string(m_n[d]) + " nodes); remove and re-add the fluid");
   }
   require(std::isfinite(time_step) && time_step > 0.0,
-          "time_step must be > 0, got " + fmt(time_step));
+          "time_step must be > 0, got " + format_number(time_step));
   const double ratio = m_p.tau / time_step;
   require(std::round(ratio) >= 1.0 && std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio,
-          "tau " + fmt(m_p.tau) + " must be an integer multiple of the time_step " +
-              fmt(time_step) + " (tau / time_step = " + fmt(ratio) + ")");
+          "tau " + format_number(m_p.tau) + " must be an integer multiple of the time_step " +
+              format_number(time_step) + " (tau / time_step = " + format_number(ratio) + ")");
 }
 
 void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {

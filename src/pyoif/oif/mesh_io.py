@@ -13,7 +13,6 @@ files, kept so that files round-trip with ESPResSo): for a stored triangle
 
 Everything here works on numpy arrays; it needs no simulation system.
 """
-import numbers
 import os
 
 import numpy as np
@@ -39,18 +38,6 @@ class MeshData:
         self.triangle_lines = (np.arange(1, len(self.triangles) + 1) if triangle_lines is None
                                else np.asarray(triangle_lines))
         self.flipped = np.zeros(len(self.triangles), dtype=bool)
-
-
-def is_integer(value):
-    """An integer of any numeric kind: int, np.int64, a 0-d integer array, or
-    a whole float (np.round(1.2) is 1.0); not bool, not 2.7."""
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        value = value.item()
-    if isinstance(value, (bool, np.bool_)):
-        return False
-    if isinstance(value, (numbers.Integral, np.integer)):
-        return True
-    return isinstance(value, (float, np.floating)) and bool(np.isfinite(value)) and float(value).is_integer()
 
 
 def _where(path, line):

@@ -21,10 +21,10 @@ import numpy as np
 
 import lbmd
 from lbmd.particle_data import ParticleHandle
+from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int
 
 from . import geometry as geo
 from . import mesh_io
-from .mesh_io import is_integer as _is_int
 from . import vtk as _vtk
 from .oif_utils import (small_epsilon, custom_str, vec_distance, get_triangle_normal, area_triangle,
                         angle_btw_triangles, angle_btw_vectors)
@@ -83,7 +83,6 @@ def live_cells(system):
 
 
 #: particle types, mol_ids and ids are int32 in the engine
-_INT32_MAX = 2**31 - 1
 
 
 def _exclusion_rings(owner, exclusion_neighbours):

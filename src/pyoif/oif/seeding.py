@@ -34,8 +34,9 @@ import numbers
 
 import numpy as np
 
+from lbmd.validation import INT32_MAX, is_whole_number as _is_int
+
 from . import mesh_io
-from .mesh_io import is_integer as _is_int
 
 
 class SeedingError(ValueError):
@@ -157,8 +158,8 @@ def _count(name, x):
 def _ptype(name, x):
     if not _is_int(x):
         raise TypeError(f"seed_cells: parameter '{name}' must hold particle types (integers >= 0), got {x!r}")
-    if not 0 <= x <= 2**31 - 1:
-        raise ValueError(f"seed_cells: parameter '{name}' must hold particle types in 0..{2**31 - 1}, got {x!r}")
+    if not 0 <= x <= INT32_MAX:
+        raise ValueError(f"seed_cells: parameter '{name}' must hold particle types in 0..{INT32_MAX}, got {x!r}")
     return int(x)
 
 

@@ -104,6 +104,18 @@ def parse(owner, params, kwargs):
     return out
 
 
+def is_whole_number(value):
+    """An integer of any numeric kind: int, np.int64, a 0-d integer array, or
+    a whole float (np.round(1.2) is 1.0); not bool, not 2.7."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if isinstance(value, (numbers.Integral, np.integer)):
+        return True
+    return isinstance(value, (float, np.floating)) and bool(np.isfinite(value)) and float(value).is_integer()
+
+
 #: ids, types and mol_ids are C++ ints; the largest id leaves room for max_id() + 1
 INT32_MAX = 2**31 - 1
 
