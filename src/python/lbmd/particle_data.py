@@ -9,7 +9,7 @@ _SCALAR_PROPS = ("mass", "type", "mol_id")
 _ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
 
 
-from .validation import INT32_MAX, integers as _integers
+from .validation import INT32_MAX, integers as _integers, is_whole_number
 
 
 def _ids_array(ids, owner="particles", name="id"):
@@ -317,12 +317,8 @@ class ParticleList:
 
     def exists(self, pid):
         """Whether particle pid exists (False for any negative or too large id)."""
-        if np.ndim(pid) == 0 and not isinstance(pid, (str, bytes, bool, np.bool_)):
-            try:
-                if np.isfinite(pid) and (pid < 0 or pid > INT32_MAX):
-                    return False
-            except TypeError:
-                pass  # not a number: _one_id names it
+        if is_whole_number(pid) and not 0 <= pid <= INT32_MAX:
+            return False
         pid = _one_id("exists", "pid", pid, INT32_MAX)
         return pid < INT32_MAX and bool(self._core.exists(pid))
 
