@@ -48,6 +48,7 @@ class SystemApi(unittest.TestCase):
         import os
         import signal
         import subprocess
+        import time
 
         def make():
             s = lbmd.System(box_l=[8, 8, 8])
@@ -82,7 +83,11 @@ class SystemApi(unittest.TestCase):
             s = make()
             killer = send_sigint_soon()
             n = 0
-            while not calls and n < 400:  # runs of about 0.1 s until the signal came
+            # runs of a few ms until the signal came (a minute at most: a
+            # count of runs was too few on a busy machine, where the sending
+            # process may take seconds to start)
+            deadline = time.monotonic() + 60.0
+            while not calls and time.monotonic() < deadline:
                 s.integrator.run(1000)
                 n += 1
             killer.wait()
