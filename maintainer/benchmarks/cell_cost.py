@@ -16,8 +16,11 @@ per 1000 steps; ESPResSo 4.2.2 on this machine kind: 0.77-1.59 ms per step
 per cell (5-20 cells). Target: <= 0.1 s per cell per 1000 steps.
 
 The same scene without fluid (--no-fluid: Langevin thermostat instead of
-LB) isolates the membrane and contact cost. For where the time goes, run
-under perf, e.g.
+LB) isolates the membrane and contact cost. Where the extra time goes is
+printed per phase of the step (integrator.timings(): bonded = membrane
+moduli, coupling = fluid coupling, lb_fluid = the lattice update, ...;
+wall clock of the same best run, so a busy machine shows in them). For a
+profile by function, run under perf, e.g.
     perf record -g -o cell_cost.perf -- build/pyoif maintainer/benchmarks/cell_cost.py --cells 20 --steps 500
     perf report -i cell_cost.perf --no-children --percent-limit 2
 """
@@ -61,23 +64,35 @@ def build(n_cells, fluid, seed=1):
     return system, rbc
 
 
+PHASES = ("bonded", "non_bonded", "constraints", "coupling", "lb_fluid", "other")
+
+
 def time_runs(systems, steps, repeats):
-    """Per system (CPU seconds, wall seconds) per 1000 steps, best of
-    `repeats`. The systems take turns (one timed run each per round), so a
-    slow spell of a shared machine hits every configuration alike instead of
-    one of them. CPU time of this process is the paper's measure (its Table
-    1) and, on one thread, does not count time the process waited for a core."""
+    """Per system (CPU seconds, wall seconds, phases) per 1000 steps, best of
+    `repeats`; phases: the wall seconds per 1000 steps of each part of the
+    step (integrator.timings()) in the run with the least CPU time. The
+    systems take turns (one timed run each per round), so a slow spell of a
+    shared machine hits every configuration alike instead of one of them.
+    CPU time of this process is the paper's measure (its Table 1) and, on
+    one thread, does not count time the process waited for a core."""
     for system in systems:
         system.integrator.run(20)  # warm up: neighbour lists, caches
     best_cpu = [np.inf] * len(systems)
     best_wall = [np.inf] * len(systems)
+    phases = [None] * len(systems)
     for _ in range(repeats):
         for k, system in enumerate(systems):
+            system.integrator.reset_timings()
             c, t = time.process_time(), time.perf_counter()
             system.integrator.run(steps)
-            best_cpu[k] = min(best_cpu[k], time.process_time() - c)
-            best_wall[k] = min(best_wall[k], time.perf_counter() - t)
-    return [(cpu * 1000.0 / steps, wall * 1000.0 / steps) for cpu, wall in zip(best_cpu, best_wall)]
+            cpu, wall = time.process_time() - c, time.perf_counter() - t
+            if cpu < best_cpu[k]:
+                best_cpu[k] = cpu
+                timings = system.integrator.timings()
+                phases[k] = {key: timings[key] * 1000.0 / steps for key in PHASES}
+            best_wall[k] = min(best_wall[k], wall)
+    return [(cpu * 1000.0 / steps, wall * 1000.0 / steps, ph)
+            for cpu, wall, ph in zip(best_cpu, best_wall, phases)]
 
 
 def creation_time(repeats=20):
@@ -110,16 +125,21 @@ def main():
     print(f"load average before the runs: {os.getloadavg()[0]:.1f} (CPU seconds are the figure; "
           f"wall seconds grow with the load)")
     rows = []
-    base = None
+    base = base_phases = None
     systems = [build(n, fluid=not args.no_fluid)[0] for n in args.cells]
-    for n, (s1000, wall1000) in zip(args.cells, time_runs(systems, args.steps, args.repeats)):
+    for n, (s1000, wall1000, phases) in zip(args.cells, time_runs(systems, args.steps, args.repeats)):
         if n == 0:
-            base = s1000
+            base, base_phases = s1000, phases
         extra = (s1000 - base) / n if (n and base is not None) else float("nan")
-        rows.append({"cells": n, "fluid": not args.no_fluid, "s_per_1000_steps": s1000,
-                     "extra_s_per_cell_per_1000_steps": extra, "wall_s_per_1000_steps": wall1000})
+        row = {"cells": n, "fluid": not args.no_fluid, "s_per_1000_steps": s1000,
+               "extra_s_per_cell_per_1000_steps": extra, "wall_s_per_1000_steps": wall1000}
+        row.update({f"{key}_s_per_1000_steps": phases[key] for key in PHASES})
+        rows.append(row)
         print(f"{n:3d} cells: {s1000:8.3f} CPU s / 1000 steps (wall {wall1000:.3f} s)"
               + (f", extra per cell {extra:.4f} CPU s / 1000 steps ({extra:.4f} ms per step)" if n else ""))
+        if n and base_phases is not None:  # where the extra time goes (wall clock, same run)
+            print("           per cell by phase (wall s / 1000 steps): " + ", ".join(
+                f"{key} {(phases[key] - base_phases[key]) / n:.4f}" for key in PHASES))
     rows.append({"cells": "create_one_cell_s", "fluid": "", "s_per_1000_steps": t_create,
                  "extra_s_per_cell_per_1000_steps": "", "wall_s_per_1000_steps": ""})
     write_rows(args.csv, rows)

@@ -180,6 +180,41 @@ class SystemApi(unittest.TestCase):
         v2 = v_half + 0.5 * dt * (-gamma * v_half) / m
         self.assertAlmostEqual(p.v[0], v2, delta=1e-14)
 
+    def test_run_timings_add_up(self):
+        # every phase of a step is exercised (bond, pair contact, wall, fluid
+        # coupling, lattice update): each is timed, they and 'other' sum to
+        # the total, and only runs count
+        s = lbmd.System(box_l=[8.0, 8.0, 8.0])
+        s.time_step = 0.05
+        s.cell_system.skin = 0.2
+        h = lbmd.interactions.HarmonicBond(k=1.0, r_0=1.0)
+        s.bonded_inter.add(h)
+        s.part.add(pos=[[3.0, 4.0, 4.0], [4.2, 4.0, 4.0]], type=[0, 0])
+        s.part.by_id(0).add_bond((h, 1))
+        s.non_bonded_inter[0, 0].soft_sphere.set_params(a=0.01, n=1.0, cutoff=1.5, offset=0.0)
+        s.constraints.add(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=1.0), particle_type=1)
+        s.non_bonded_inter[0, 1].soft_sphere.set_params(a=0.01, n=1.0, cutoff=4.0, offset=0.0)
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.05)
+        s.actors.add(lbf)
+        s.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+        t = s.integrator.timings()
+        self.assertEqual(t["steps"], 0)
+        self.assertEqual(t["total"], 0.0)
+        s.integrator.run(30)
+        s.analysis.energy()  # force computations outside runs are not counted
+        t = s.integrator.timings()
+        self.assertEqual(t["steps"], 30)
+        phases = ("bonded", "non_bonded", "constraints", "coupling", "lb_fluid", "other")
+        for key in phases:
+            self.assertGreater(t[key], 0.0, key)
+        self.assertAlmostEqual(sum(t[k] for k in phases), t["total"], delta=1e-9 * t["total"])
+        self.assertIn("total (30 steps)", s.integrator.timing_report())
+        s.integrator.run(10)
+        self.assertEqual(s.integrator.timings()["steps"], 40)
+        self.assertGreater(s.integrator.timings()["total"], t["total"])
+        s.integrator.reset_timings()
+        self.assertEqual(s.integrator.timings(), dict.fromkeys(("steps", "total") + phases, 0))
+
     def test_features(self):
         lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])
         self.assertTrue(lbmd.has_features("LB_BOUNDARIES"))

@@ -1,6 +1,7 @@
 // Force calculation of one step (architecture data flow steps 1-5).
 #include "interactions/bonded/bond_loop.hpp"
 #include "system/system.hpp"
+#include "utils/phase_clock.hpp"
 #include "utils/random.hpp"
 
 #include <algorithm>
@@ -238,14 +239,19 @@ template <bool with_energy> void System::force_loop(Energies* e, bool forces_pre
   if (!forces_preset)
     for (std::size_t i = 0; i < p.n_local(); ++i)
       p.force[i] = p.ext_force[i];
+  PhaseClock clock(m_timing && !with_energy);
   add_bonded_forces(e);
+  clock.lap(run_timings.bonded);
   add_nonbonded_forces(e);
+  clock.lap(run_timings.non_bonded);
   add_constraint_forces(e);
+  clock.lap(run_timings.constraints);
   if constexpr (!with_energy) {
     if (m_langevin.active && m_langevin.gamma > 0.0)
       add_langevin_forces();
     if (m_lb && m_lb_coupling.active)
       lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
+    clock.lap(run_timings.coupling);
   }
 }
 
@@ -310,6 +316,16 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   }
   if (constraint_shape_version() != m_shape_version_of_forces)
     invalidate_forces(); // a constraint's shape changed (Union.add ...)
+  // run_timings: the whole call, however it ends
+  struct RunClock {
+    System& s;
+    PhaseClock clock{true};
+    explicit RunClock(System& sys) : s(sys) { s.m_timing = true; }
+    ~RunClock() {
+      s.m_timing = false;
+      clock.lap(s.run_timings.total);
+    }
+  } run_clock(*this);
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces))
     compute_forces();
@@ -406,6 +422,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
   for (int step = 0; step < n_steps; ++step) {
     ++step_count;
+    ++run_timings.steps; // begun (one cut short by an exception counts)
     time += dt;
     prepare_step(moved);
     // after the fused pass the forces already hold the external forces
@@ -416,7 +433,9 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     if (m_lb && ++m_lb_substep >= lb_interval) {
       m_lb_substep = 0;
       try {
+        PhaseClock clock(true);
         m_lb->step();
+        clock.lap(run_timings.lb_fluid);
       } catch (const SimulationInstability& e) {
         if (!last)
           second_kick(); // leave the particles as a step that ended here

@@ -161,6 +161,18 @@ public:
    *  bit for bit as after a split run). The Python binding uses it for
    *  Ctrl-C. Empty: never called. */
   std::function<void()> interruption_point;
+  /** Where the runs' time went (wall clock, seconds), summed over the runs
+   *  since the System was made or the last reset (LAMMPS prints such a
+   *  breakdown after each run). total: all of integrate(); the phases are
+   *  parts of it, the rest (velocity Verlet, neighbour rebuilds, checks) is
+   *  total minus their sum. Force computations outside runs are not
+   *  counted. Seven clock reads per step: nothing against a step's cost. */
+  struct RunTimings {
+    std::uint64_t steps = 0;
+    double total = 0.0, bonded = 0.0, non_bonded = 0.0, constraints = 0.0, coupling = 0.0,
+           lb_fluid = 0.0;
+  };
+  RunTimings run_timings;
   /** Recompute all forces for the current positions (no time advance). */
   void compute_forces();
   Energies compute_energies();
@@ -211,6 +223,8 @@ private:
   double m_time_step = 0.01;
   bool m_forces_valid = false;
   int m_lb_substep = 0;
+  /// inside integrate(): force_loop adds its phases to run_timings
+  bool m_timing = false;
 };
 
 } // namespace pyoif

@@ -287,6 +287,20 @@ void bind_system(py::module_& m) {
             s.cells.invalidate();
           })
       .def_property_readonly("n_rebuilds", [](const System& s) { return s.cells.n_rebuilds(); })
+      .def("run_timings",
+           [](const System& s) {
+             const System::RunTimings& t = s.run_timings;
+             py::dict d;
+             d["steps"] = t.steps;
+             d["total"] = t.total;
+             d["bonded"] = t.bonded;
+             d["non_bonded"] = t.non_bonded;
+             d["constraints"] = t.constraints;
+             d["coupling"] = t.coupling;
+             d["lb_fluid"] = t.lb_fluid;
+             return d;
+           })
+      .def("reset_run_timings", [](System& s) { s.run_timings = System::RunTimings{}; })
       .def_property_readonly("max_range", [](const System& s) { return s.nonbonded.max_range(); })
       .def_property_readonly("rank", [](const System& s) { return s.comm.rank(); })
       .def_property_readonly("n_ranks", [](const System& s) { return s.comm.size(); })

@@ -64,6 +64,44 @@ class Integrator:
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
 
+    def timings(self):
+        """Where the time of the runs went, summed over all ``run()`` calls
+        since the System was made or since ``reset_timings()``: a dict of
+        wall-clock seconds, 'total' (all of ``run()``) and its parts
+        'bonded' (membrane moduli, bonds), 'non_bonded' (pair contacts),
+        'constraints' (walls), 'coupling' (thermostat: particle-fluid
+        coupling or Langevin forces), 'lb_fluid' (the lattice update) and
+        'other' (velocity Verlet, neighbour lists, checks); 'steps': the
+        steps run. Under mpirun, this rank's."""
+        t = self._system._core.run_timings()
+        t["other"] = max(0.0, t["total"] - sum(t[k] for k, _ in _TIMED_PHASES))
+        return t
+
+    def reset_timings(self):
+        """Start the sums of ``timings()`` again from zero."""
+        self._system._core.reset_run_timings()
+
+    def timing_report(self):
+        """``timings()`` as a table (seconds, milliseconds per step, share of
+        the total), for printing after a run."""
+        t = self.timings()
+        steps, total = t["steps"], t["total"]
+        lines = [f"{'phase':<44s} {'seconds':>10s} {'ms/step':>9s} {'share':>7s}"]
+        for key, label in _TIMED_PHASES + (("other", "other: velocity Verlet, neighbour lists"),):
+            per_step = 1e3 * t[key] / steps if steps else 0.0
+            share = 100.0 * t[key] / total if total > 0 else 0.0
+            lines.append(f"{label:<44s} {t[key]:10.3f} {per_step:9.3f} {share:6.1f}%")
+        lines.append(f"{'total (' + str(steps) + ' steps)':<44s} {total:10.3f} "
+                     f"{(1e3 * total / steps if steps else 0.0):9.3f} {100.0 if total > 0 else 0.0:6.1f}%")
+        return "\n".join(lines)
+
+
+_TIMED_PHASES = (("bonded", "bonded: membrane moduli, bonds"),
+                 ("non_bonded", "non-bonded: pair contacts"),
+                 ("constraints", "constraints: walls"),
+                 ("coupling", "thermostat: fluid coupling or Langevin"),
+                 ("lb_fluid", "lattice-Boltzmann update"))
+
 
 def _interruptible():
     """Whether a run may stop for Ctrl-C between steps: Python handles
