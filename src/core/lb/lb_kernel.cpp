@@ -235,14 +235,14 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         std::uint32_t valid = field_valid_bits32(b0);
         if (len < block)
           valid &= (std::uint32_t{1} << len) - 1u;
-        if (valid) {
-          const double* __restrict gb = g + 3 * b0;
-          for (int i = 0; i < len; ++i) {
-            const bool marked = (valid >> i) & 1u;
-            force[0][i] += marked ? gb[3 * i] : 0.0;
-            force[1][i] += marked ? gb[3 * i + 1] : 0.0;
-            force[2][i] += marked ? gb[3 * i + 2] : 0.0;
-          }
+        // the marked entries alone: the coupling has just written them (in
+        // cache), the block's others are stale and may have left the cache
+        const double* __restrict gb = g + 3 * b0;
+        for (std::uint32_t bits = valid; bits; bits &= bits - 1) {
+          const int i = __builtin_ctz(bits);
+          force[0][i] += gb[3 * i];
+          force[1][i] += gb[3 * i + 1];
+          force[2][i] += gb[3 * i + 2];
         }
       }
       const double* in[Q];
