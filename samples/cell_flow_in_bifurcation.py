@@ -185,3 +185,5 @@ n = max(len(branch), 1)
 print(f"share of cells entering the lower (width {w_low}) / upper (width {w_up}) branch: "
       f"{sum(v == 'lower' for v in branch.values()) / n:.2f} / {sum(v == 'upper' for v in branch.values()) / n:.2f}"
       f" ({len(branch)} cells)")
+# where the time went (wall clock by phase of the step), as after a LAMMPS run
+print(system.integrator.timing_report())
