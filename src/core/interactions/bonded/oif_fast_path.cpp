@@ -137,24 +137,33 @@ struct EdgeBlock {
 };
 
 /** A cell's area (sum of its triangles' areas) and volume (eqs. 6, 7: sum of
- *  a.N / 6), from per-triangle arrays: four partial sums, so that there is
- *  no loop-carried chain of additions. */
-void cell_area_volume(const double* area, const double* vol, int n, double& cell_area,
-                      double& cell_volume) {
-  double sa[4] = {0.0, 0.0, 0.0, 0.0}, sv[4] = {0.0, 0.0, 0.0, 0.0};
-  int k = 0;
-  for (; k + 4 <= n; k += 4)
-    for (int j = 0; j < 4; ++j) {
-      sa[j] += area[k + j];
-      sv[j] += vol[k + j];
+ *  a.N / 6) from per-triangle values: four partial sums over k mod 4, so
+ *  that there is no loop-carried chain of additions, the last n mod 4 terms
+ *  into the first. Fed in order, whole or block by block (blocks starting
+ *  at multiples of 4), the sums are the same bit for bit. */
+class AreaVolumeSums {
+public:
+  explicit AreaVolumeSums(int n) : m_n4(n - n % 4) {}
+  /** Triangles first .. first + nb - 1: area[k], vol[k] for first + k. */
+  void add(const double* area, const double* vol, int first, int nb) {
+    const int full = std::max(0, std::min(nb, m_n4 - first));
+    for (int k = 0; k < full; k += 4)
+      for (int j = 0; j < 4; ++j) {
+        m_area[j] += area[k + j];
+        m_vol[j] += vol[k + j];
+      }
+    for (int k = full; k < nb; ++k) {
+      m_area[0] += area[k];
+      m_vol[0] += vol[k];
     }
-  for (; k < n; ++k) {
-    sa[0] += area[k];
-    sv[0] += vol[k];
   }
-  cell_area = (sa[0] + sa[1]) + (sa[2] + sa[3]);
-  cell_volume = ((sv[0] + sv[1]) + (sv[2] + sv[3])) / 6.0;
-}
+  double area() const { return (m_area[0] + m_area[1]) + (m_area[2] + m_area[3]); }
+  double volume() const { return ((m_vol[0] + m_vol[1]) + (m_vol[2] + m_vol[3])) / 6.0; }
+
+private:
+  int m_n4;
+  double m_area[4] = {0.0, 0.0, 0.0, 0.0}, m_vol[4] = {0.0, 0.0, 0.0, 0.0};
+};
 
 /** The edge pass of edge_block_forces for one combination of terms known
  *  at compile time: neo (ks != 0), visc (kvisc != 0, dv set), wings (u, w
@@ -844,8 +853,9 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     }
     if (bad)
       return false;
-    double cell_area, cell_volume;
-    cell_area_volume(area, vol, n, cell_area, cell_volume);
+    AreaVolumeSums sums(n);
+    sums.add(area, vol, 0, n);
+    const double cell_area = sums.area(), cell_volume = sums.volume();
     if (!(cell_area > 0.0))
       return false;
     // volume (eq. 7): F = -kv (|V| - V0)/V0 s N / 6 on each vertex
@@ -1073,7 +1083,6 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
   share_cell_tables();
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
-  m_tri_edge.assign(2 * largest_tri, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_f.resize(n_slots);
   m_normal.resize(n_slots);
   return true;
@@ -1207,11 +1216,8 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     nsum[k].v = zero;
   }
   double* const tri = m_tri.data();
-  double *const e1x = tri, *const e1y = tri + ts, *const e1z = tri + 2 * ts;
-  double *const e2x = tri + 3 * ts, *const e2y = tri + 4 * ts, *const e2z = tri + 5 * ts;
-  double *const nx = tri + 6 * ts, *const ny = tri + 7 * ts, *const nz = tri + 8 * ts;
-  double *const area = tri + 9 * ts, *const vol = tri + 10 * ts, *const g = tri + 11 * ts,
-                *const coef = tri + 12 * ts;
+  double *const nx = tri, *const ny = tri + ts, *const nz = tri + 2 * ts;
+  double *const g = tri + 3 * ts, *const coef = tri + 4 * ts;
   const int *const v0 = m_tri_v0.data() + r.triangle_begin,
                    *const v1 = m_tri_v1.data() + r.triangle_begin,
                    *const v2 = m_tri_v2.data() + r.triangle_begin;
@@ -1227,54 +1233,52 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   //   kag (S_cell - S_cell0) / S_cell0 S for the global area (eq. 6; g
   //   below, the cell's factor applied once the cell's area is known).
   // In blocks: the scalar gather of the separations, then the arithmetic as
-  // loops over arrays (vectorised).
+  // loops over arrays (vectorised); the cell's area and volume summed block
+  // by block (AreaVolumeSums).
   const double kal = local_ia.kal;
   const Lanes origin = x[r.origin].v;
-  Node4 *const edge1 = m_tri_edge.data(), *const edge2 = edge1 + m_tri_edge.size() / 2;
   constexpr double third = 1.0 / 3.0;
+  static_assert(kBlock % 4 == 0, "AreaVolumeSums: blocks start at multiples of 4");
+  AreaVolumeSums sums(n_tri);
   int bad = 0;
   for (int first = 0; first < n_tri; first += kBlock) {
     const int nb = std::min(kBlock, n_tri - first);
-    double ra[3][kBlock];
+    double e1[3][kBlock], e2[3][kBlock], ra[3][kBlock], area[kBlock], vol[kBlock];
     int k0 = 0;
     for (; k0 + 4 <= nb; k0 += 4) { // four triangles at a time (store_components)
-      Lanes e1[4], e2[4], a[4];
+      Lanes d1[4], d2[4], a[4];
       for (int j = 0; j < 4; ++j) {
         const int q = first + k0 + j;
         const Lanes pa = x[v0[q]].v;
-        e1[j] = x[v1[q]].v - pa;
-        e2[j] = x[v2[q]].v - pa;
+        d1[j] = x[v1[q]].v - pa;
+        d2[j] = x[v2[q]].v - pa;
         a[j] = pa - origin;
-        edge1[q].v = e1[j];
-        edge2[q].v = e2[j];
       }
-      const int q = first + k0;
-      store_components(e1[0], e1[1], e1[2], e1[3], e1x + q, e1y + q, e1z + q);
-      store_components(e2[0], e2[1], e2[2], e2[3], e2x + q, e2y + q, e2z + q);
+      store_components(d1[0], d1[1], d1[2], d1[3], e1[0] + k0, e1[1] + k0, e1[2] + k0);
+      store_components(d2[0], d2[1], d2[2], d2[3], e2[0] + k0, e2[1] + k0, e2[2] + k0);
       store_components(a[0], a[1], a[2], a[3], ra[0] + k0, ra[1] + k0, ra[2] + k0);
     }
     for (int k = k0; k < nb; ++k) {
       const int q = first + k;
-      const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, a = pa - origin;
-      edge1[q].v = e1;
-      edge2[q].v = e2;
-      e1x[q] = e1[0], e1y[q] = e1[1], e1z[q] = e1[2];
-      e2x[q] = e2[0], e2y[q] = e2[1], e2z[q] = e2[2];
-      for (int d = 0; d < 3; ++d)
+      const Lanes pa = x[v0[q]].v, d1 = x[v1[q]].v - pa, d2 = x[v2[q]].v - pa, a = pa - origin;
+      for (int d = 0; d < 3; ++d) {
+        e1[d][k] = d1[d];
+        e2[d][k] = d2[d];
         ra[d][k] = a[d];
+      }
     }
     PYOIF_INDEPENDENT_ITERATIONS
     for (int k = 0; k < nb; ++k) {
       const int q = first + k;
-      const double e1x_ = e1x[q], e1y_ = e1y[q], e1z_ = e1z[q];
-      const double e2x_ = e2x[q], e2y_ = e2y[q], e2z_ = e2z[q];
+      const double e1x_ = e1[0][k], e1y_ = e1[1][k], e1z_ = e1[2][k];
+      const double e2x_ = e2[0][k], e2y_ = e2[1][k], e2z_ = e2[2][k];
       const double nx_ = e1y_ * e2z_ - e1z_ * e2y_;
       const double ny_ = e1z_ * e2x_ - e1x_ * e2z_;
       const double nz_ = e1x_ * e2y_ - e1y_ * e2x_;
       const double s = 0.5 * std::sqrt(nx_ * nx_ + ny_ * ny_ + nz_ * nz_);
       bad |= !(s > 0.0);
-      area[q] = s;
-      vol[q] = ra[0][k] * nx_ + ra[1][k] * ny_ + ra[2][k] * nz_;
+      area[k] = s;
+      vol[k] = ra[0][k] * nx_ + ra[1][k] * ny_ + ra[2][k] * nz_;
       nx[q] = nx_, ny[q] = ny_, nz[q] = nz_;
       // centroid relative to the first vertex: T - p0 = (e1 + e2) / 3
       const double m0x = (e1x_ + e2x_) * third, m0y = (e1y_ + e2y_) * third,
@@ -1286,11 +1290,11 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
       g[q] = s * inv_norm2;
       coef[q] = kal * (weight[q] * s - area0[q]) * inv_norm2;
     }
+    sums.add(area, vol, first, nb);
   }
   if (bad)
     return false;
-  double cell_area, cell_volume;
-  cell_area_volume(area, vol, n_tri, cell_area, cell_volume);
+  const double cell_area = sums.area(), cell_volume = sums.volume();
   if (!(cell_area > 0.0))
     return false;
   const double ka_g = global_ia.ka_g, kv = global_ia.kv, A0_g = global_ia.A0_g, V0 = global_ia.V0;
@@ -1307,7 +1311,7 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   const bool normal_sums = volume_factor != 0.0 || write_normals;
   for (int q = 0; q < n_tri; ++q) {
     const double cq = coef[q] + area_factor * g[q];
-    const Lanes e1 = edge1[q].v, e2 = edge2[q].v, m0 = (e1 + e2) * third;
+    const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, m0 = (e1 + e2) * third;
     f[v0[q]].v += cq * m0;
     f[v1[q]].v += cq * (m0 - e1);
     f[v2[q]].v += cq * (m0 - e2);

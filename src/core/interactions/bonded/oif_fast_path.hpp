@@ -306,8 +306,8 @@ private:
   std::vector<int> m_edge_b, m_edge_a, m_edge_c, m_edge_d;
   std::vector<double> m_edge_r0, m_edge_inv_r0, m_edge_cos_psi0, m_edge_sin_psi0;
 
-  static constexpr int kNodeArrays = 4;      ///< x, v, f, normal sum
-  static constexpr int kTriangleArrays = 13; ///< e1, e2, N: 3 each; area, volume, g, c
+  static constexpr int kNodeArrays = 4;     ///< x, v, f, normal sum
+  static constexpr int kTriangleArrays = 5; ///< N (3), g, c: what the force scatter reads
   /** A node as one 4-lane register (Lanes): the scatters add a bond's force
    *  to a node with one load, add and store instead of three (the passes are
    *  bound by stores), the gathers load a node at once. */
@@ -315,10 +315,11 @@ private:
     Lanes v;
   };
   std::vector<Node4> m_node; ///< kNodeArrays x (largest cell's nodes)
-  /// per triangle its edge vectors e1 = b - a, e2 = c - a as vectors (the
-  /// force scatter's centroid directions), 2 x (largest cell's triangles)
-  std::vector<Node4> m_tri_edge;
-  std::vector<double> m_tri;  ///< kTriangleArrays x (largest cell's triangles)
+  /// kTriangleArrays x (largest cell's triangles); the triangle pass's other
+  /// per-triangle values (edge vectors, area, volume term) live in its block
+  /// only: this scratch leaves L2 at every lattice sweep and is read back
+  /// from L3 once per step, so it is kept small
+  std::vector<double> m_tri;
   std::vector<Vec3> m_f;      ///< slot -> force of this step
   std::vector<Vec3> m_normal; ///< slot -> unit normal (write_normals)
 };
