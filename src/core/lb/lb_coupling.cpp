@@ -45,10 +45,10 @@ inline CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
     s.frac[d] = x - fl;
     lo[d] = wrap_node(static_cast<int>(fl), n[d]);
   }
-  s.base = fluid.padded_index_in_box(lo[0], lo[1], lo[2]);
+  std::uint64_t wraps = 0;
   for (int d = 0; d < 3; ++d)
-    s.step[d] =
-        lo[d] + 1 < n[d] ? fluid.padded_axis_stride(d) : fluid.padded_axis_stride(d) * (1 - n[d]);
+    wraps |= std::uint64_t{lo[d] + 1 >= n[d]} << d;
+  s.key = (std::uint64_t{fluid.padded_index_in_box(lo[0], lo[1], lo[2])} << 3) | wraps;
   return s;
 }
 
@@ -58,14 +58,15 @@ Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const V
   // the 8 nodes around pos and their trilinear weights; node (i, j, k) sits
   // at ((i, j, k) + 1/2) agrid
   const CompactStencil s = compact_stencil(fluid, box.folded(pos));
+  const auto steps = fluid.stencil_steps();
   Vec3 u = Vec3::Zero();
   for (int m = 0; m < 8; ++m)
-    u += s.weight(m) * fluid.velocity_at_index(s.node(m));
+    u += s.weight(m) * fluid.velocity_at_index(steps.node(s, m));
   return u;
 }
 
 [[noreturn]] __attribute__((noinline, cold)) void throw_outside(const ParticleStore& p,
-                                                               const BoxGeometry& box) {
+                                                                const BoxGeometry& box) {
   for (std::size_t i = 0; i < p.n_local(); ++i)
     for (int d = 0; d < 3; ++d)
       if (!box.periodic()[d] && !(p.pos[i][d] >= 0.0 && p.pos[i][d] <= box.length()[d]))
@@ -100,8 +101,8 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                      box.periodic()[2] ? HUGE_VAL : box.length()[2]);
     bool outside = false;
     for (std::size_t i = 0; i < n; ++i)
-      outside |= !((p.pos[i].array() >= lower.array()).all() &&
-                   (p.pos[i].array() <= upper.array()).all());
+      outside |=
+          !((p.pos[i].array() >= lower.array()).all() && (p.pos[i].array() <= upper.array()).all());
     if (outside)
       throw_outside(p, box);
   }
@@ -113,12 +114,13 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (n > 0 || (same_step && !ledger.last_impulse.empty()))
     fluid.open_impulse_field();
   const double scale = fluid.impulse_scale();
+  const auto steps = fluid.stencil_steps();
   if (same_step) // the last pass's stencils are still in the ledger
     for (std::size_t i = 0; i < ledger.last_impulse.size(); ++i) {
       const CompactStencil& s = ledger.stencils[i];
       const Vec3 retract = -0.5 * scale * ledger.last_impulse[i];
       for (int m = 0; m < 8; ++m)
-        fluid.add_field_impulse(s.node(m), s.weight(m) * retract);
+        fluid.add_field_impulse(steps.node(s, m), s.weight(m) * retract);
     }
   ledger.any = true;
   ledger.step = step;
@@ -168,13 +170,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   for (std::size_t i = 0; i < n; ++i) {
     const CompactStencil s = compact_stencil(fluid, p.pos[i]);
     const CompactStencil& old = stencils[i];
-    const bool moved = renumber || s.base != old.base || s.step[0] != old.step[0] ||
-                       s.step[1] != old.step[1] || s.step[2] != old.step[2];
+    const bool moved = renumber || s.key != old.key;
     stencils[i] = s;
     if (!moved)
       continue;
     for (int m = 0; m < 8; ++m) {
-      const std::size_t node = s.node(m);
+      const std::size_t node = steps.node(s, m);
       // branch-free: whether a node is new is as good as random
       const std::uint64_t word = needed[node >> 6], bit = std::uint64_t{1} << (node & 63);
       const bool is_new = !(word & bit);

@@ -193,23 +193,33 @@ public:
     std::vector<Vec3> last_impulse;
     Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
     /// The stencil of a particle as its first node (lowest index on every
-    /// axis) and, per axis, the index step to the second node (the lattice
-    /// stride, or less the period where the stencil wraps around the box)
-    /// and the fraction towards it: node m = (dx, dy, dz) (m = dx + 2 dy +
-    /// 4 dz) is base + dx step_x + dy step_y + dz step_z, its weight the
-    /// product of (d ? frac : 1 - frac) over the axes.
+    /// axis), per axis whether the second node lies across the box's
+    /// periodic edge, and the fraction towards it: node m = (dx, dy, dz)
+    /// (m = dx + 2 dy + 4 dz) is base + the steps of the axes with d = 1
+    /// (StencilSteps: the lattice stride, or less the period where the
+    /// stencil wraps round the box), its weight the product of
+    /// (d ? frac : 1 - frac) over the axes. key = base << 3 | wrap bits: one
+    /// comparison tells a stencil that moved; 32 bytes, read and written for
+    /// every coupled particle and step.
     struct Stencil {
-      std::size_t base;
-      std::ptrdiff_t step[3];
+      std::uint64_t key;
       double frac[3];
-      std::size_t node(int m) const {
-        return static_cast<std::size_t>(static_cast<std::ptrdiff_t>(base) +
-                                        ((m & 1) ? step[0] : 0) + ((m & 2) ? step[1] : 0) +
-                                        ((m & 4) ? step[2] : 0));
-      }
+      std::size_t base() const { return static_cast<std::size_t>(key >> 3); }
       double weight(int m) const {
         return ((m & 1) ? frac[0] : 1.0 - frac[0]) * ((m & 2) ? frac[1] : 1.0 - frac[1]) *
                ((m & 4) ? frac[2] : 1.0 - frac[2]);
+      }
+    };
+    /// Per axis the index step from a stencil's first to its second node:
+    /// the lattice stride, or the stride less the period (wrapped).
+    struct StencilSteps {
+      std::ptrdiff_t plain[3], wrapped[3];
+      std::size_t node(const Stencil& s, int m) const {
+        std::ptrdiff_t n = static_cast<std::ptrdiff_t>(s.base());
+        for (int d = 0; d < 3; ++d)
+          if ((m >> d) & 1)
+            n += ((s.key >> d) & 1) ? wrapped[d] : plain[d];
+        return static_cast<std::size_t>(n);
       }
     };
     /// The lattice nodes of the coupling passes since the last renumbering:
@@ -234,6 +244,15 @@ public:
     std::vector<std::uint32_t> stencil_entries;          ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
+  /** The coupling stencils' steps (CouplingLedger::StencilSteps). */
+  CouplingLedger::StencilSteps stencil_steps() const {
+    CouplingLedger::StencilSteps st;
+    for (int d = 0; d < 3; ++d) {
+      st.plain[d] = padded_axis_stride(d);
+      st.wrapped[d] = padded_axis_stride(d) * (1 - m_n[d]);
+    }
+    return st;
+  }
   /** For each node n of the ledger's list (`node`, mostly in increasing
    *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
    *  with the populations of nodes further down the list prefetched. */
