@@ -43,7 +43,7 @@ CASES = {"A": (10.0, 20.0), "B": (12.0, 18.0), "C": (15.0, 15.0)}
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("--case", choices=sorted(CASES), default="A")
-ap.add_argument("--cells", type=int, default=None, help="number of RBCs (default 8, --full 40)")
+ap.add_argument("--cells", type=int, default=None, help="number of RBCs (default 6, --full 40)")
 ap.add_argument("--rare", action="store_true", help="add the stiff rare cell")
 ap.add_argument("--full", action="store_true", help="the paper's sizes (slow: hours)")
 ap.add_argument("--height", type=float, default=None, help="channel height (default 14, --full 20)")

@@ -4,7 +4,7 @@ RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
 0 / 5 / 20 / 60 cells on one core, and the time to create one cell.
 
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--steps 200] [--repeats 5] [--cells 0 5 20 60]
-        [--csv cell_cost.csv] [--no-fluid]
+        [--csv cell_cost.csv] [--no-fluid] [--chunk 10 --rounds 60]
 
 Scene (as the ESPResSo 4.2.2 timing in reference/model.md): channel
 100 x 40 x 20 (agrid 1, tau = time step = 0.1, visc 1.5, dens 1) between two
@@ -95,6 +95,32 @@ def time_runs(systems, steps, repeats):
             for cpu, wall, ph in zip(best_cpu, best_wall, phases)]
 
 
+def time_chunks(systems, chunk, rounds):
+    """Per system (wall seconds, wall seconds, phases) per 1000 steps from
+    many short runs: `rounds` times, each system runs 2 steps (its caches
+    refilled after the others' runs) and then `chunk` timed steps; of each
+    system's runs the quietest quarter (least total time) is averaged,
+    phase by phase (integrator.timings()). On a shared machine whose speed
+    drifts within seconds this is steadier than the best of a few long
+    runs; wall time, as the phase timings are."""
+    for system in systems:
+        system.integrator.run(20)
+    records = [[] for _ in systems]
+    for _ in range(rounds):
+        for k, system in enumerate(systems):
+            system.integrator.run(2)
+            system.integrator.reset_timings()
+            system.integrator.run(chunk)
+            records[k].append(system.integrator.timings())
+    results = []
+    for runs in records:
+        quiet = sorted(runs, key=lambda t: t["total"])[: max(3, len(runs) // 4)]
+        phases = {key: 1000.0 * float(np.mean([t[key] for t in quiet])) / chunk for key in PHASES}
+        total = 1000.0 * float(np.mean([t["total"] for t in quiet])) / chunk
+        results.append((total, total, phases))
+    return results
+
+
 def creation_time(repeats=20):
     system = lbmd.System(box_l=[400.0, 400.0, 400.0])
     system.time_step = 0.1
@@ -116,31 +142,40 @@ def main():
                     help="rounds: timed runs per configuration, taken in turns (best counts)")
     ap.add_argument("--cells", type=int, nargs="+", default=[0, 5, 20, 60])
     ap.add_argument("--no-fluid", action="store_true", help="Langevin instead of LB (membrane cost alone)")
+    ap.add_argument("--chunk", type=int, default=0,
+                    help="instead of the best of --repeats runs of --steps: runs of CHUNK steps (e.g. 10), the "
+                         "configurations in turn for --rounds rounds, the quietest quarter averaged (wall "
+                         "clock; steadier on a busy shared machine)")
+    ap.add_argument("--rounds", type=int, default=60, help="rounds of --chunk runs")
     ap.add_argument("--csv", default="cell_cost.csv")
     args = ap.parse_args()
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("note: set OMP_NUM_THREADS=1 for the one-core figure")
     t_create = creation_time()
     print(f"creating one 374-node cell with all bonds and exclusions: {1e3 * t_create:.2f} ms (median)")
-    print(f"load average before the runs: {os.getloadavg()[0]:.1f} (CPU seconds are the figure; "
-          f"wall seconds grow with the load)")
+    unit = "wall s" if args.chunk else "CPU s"
+    print(f"load average before the runs: {os.getloadavg()[0]:.1f} ("
+          + ("wall seconds of the quietest quarter of short runs are the figure)" if args.chunk else
+             "CPU seconds are the figure; wall seconds grow with the load)"))
     rows = []
     base = base_phases = None
     systems = [build(n, fluid=not args.no_fluid)[0] for n in args.cells]
-    for n, (s1000, wall1000, phases) in zip(args.cells, time_runs(systems, args.steps, args.repeats)):
+    results = (time_chunks(systems, args.chunk, args.rounds) if args.chunk
+               else time_runs(systems, args.steps, args.repeats))
+    for n, (s1000, wall1000, phases) in zip(args.cells, results):
         if n == 0:
             base, base_phases = s1000, phases
         extra = (s1000 - base) / n if (n and base is not None) else float("nan")
-        row = {"cells": n, "fluid": not args.no_fluid, "s_per_1000_steps": s1000,
+        row = {"cells": n, "fluid": not args.no_fluid, "measure": unit, "s_per_1000_steps": s1000,
                "extra_s_per_cell_per_1000_steps": extra, "wall_s_per_1000_steps": wall1000}
         row.update({f"{key}_s_per_1000_steps": phases[key] for key in PHASES})
         rows.append(row)
-        print(f"{n:3d} cells: {s1000:8.3f} CPU s / 1000 steps (wall {wall1000:.3f} s)"
-              + (f", extra per cell {extra:.4f} CPU s / 1000 steps ({extra:.4f} ms per step)" if n else ""))
+        print(f"{n:3d} cells: {s1000:8.3f} {unit} / 1000 steps (wall {wall1000:.3f} s)"
+              + (f", extra per cell {extra:.4f} {unit} / 1000 steps ({extra:.4f} ms per step)" if n else ""))
         if n and base_phases is not None:  # where the extra time goes (wall clock, same run)
             print("           per cell by phase (wall s / 1000 steps): " + ", ".join(
                 f"{key} {(phases[key] - base_phases[key]) / n:.4f}" for key in PHASES))
-    rows.append({"cells": "create_one_cell_s", "fluid": "", "s_per_1000_steps": t_create,
+    rows.append({"cells": "create_one_cell_s", "fluid": "", "measure": "wall s", "s_per_1000_steps": t_create,
                  "extra_s_per_cell_per_1000_steps": "", "wall_s_per_1000_steps": ""})
     write_rows(args.csv, rows)
 

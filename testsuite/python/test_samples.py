@@ -47,6 +47,8 @@ def vtk_point_count(path):
     raise AssertionError(f"{path}: no POINTS line")
 
 
+@unittest.skipUnless(os.path.isfile(os.path.join(BUILD, "pyoif")),
+                     "no launcher: run through ctest (PYOIF_BUILD_DIR)")
 class Samples(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.TemporaryDirectory()

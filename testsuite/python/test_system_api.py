@@ -197,23 +197,31 @@ class SystemApi(unittest.TestCase):
         lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.05)
         s.actors.add(lbf)
         s.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+        phases = ("bonded", "non_bonded", "constraints", "coupling", "lb_fluid")
+        # the force computation a run starts with (stale forces) is not a step's
+        s.integrator.run(0, recalc_forces=True)
         t = s.integrator.timings()
         self.assertEqual(t["steps"], 0)
-        self.assertEqual(t["total"], 0.0)
+        for key in phases:
+            self.assertEqual(t[key], 0.0, key)
         s.integrator.run(30)
-        s.analysis.energy()  # force computations outside runs are not counted
         t = s.integrator.timings()
         self.assertEqual(t["steps"], 30)
-        phases = ("bonded", "non_bonded", "constraints", "coupling", "lb_fluid", "other")
-        for key in phases:
+        for key in phases + ("other",):  # 'other': the Verlet passes at least
             self.assertGreater(t[key], 0.0, key)
-        self.assertAlmostEqual(sum(t[k] for k in phases), t["total"], delta=1e-9 * t["total"])
+        self.assertGreater(t["total"], sum(t[k] for k in phases))
+        # force computations outside runs are not counted
+        s.analysis.energy()
+        s.cell_system.get_pairs(1.0)
+        s.integrator.run(0, recalc_forces=True)
+        for key in ("steps",) + phases:
+            self.assertEqual(s.integrator.timings()[key], t[key], key)
         self.assertIn("total (30 steps)", s.integrator.timing_report())
         s.integrator.run(10)
         self.assertEqual(s.integrator.timings()["steps"], 40)
         self.assertGreater(s.integrator.timings()["total"], t["total"])
         s.integrator.reset_timings()
-        self.assertEqual(s.integrator.timings(), dict.fromkeys(("steps", "total") + phases, 0))
+        self.assertEqual(s.integrator.timings(), dict.fromkeys(("steps", "total", "other") + phases, 0))
 
     def test_features(self):
         lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])
