@@ -1084,7 +1084,6 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
   m_f.resize(n_slots);
-  m_normal.resize(n_slots);
   return true;
 }
 
@@ -1201,7 +1200,8 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
 }
 
 bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
-                                      const OifGlobalForces& global_ia, bool write_normals) {
+                                      const OifGlobalForces& global_ia, bool write_normals,
+                                      ParticleStore& p) {
   const CellRange& r = m_cells[cell];
   const int n_nodes = r.node_end - r.node_begin, n_tri = r.triangle_end - r.triangle_begin;
   // node arrays, one 4-lane vector (x, y, z, 0) per node (Node4)
@@ -1398,12 +1398,16 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   }
   if (!finite)
     return false;
-  if (write_normals) { // OifOutDirection's area-weighted normals, outward by the volume's sign
-    Vec3* const normal = m_normal.data() + r.node_begin;
+  // OifOutDirection's area-weighted normals, outward by the volume's sign,
+  // straight into the particles while the cell's are in cache (normals are
+  // set, not added: should a later cell decline, the pass that then
+  // evaluates the OifOutDirection group sets them all again)
+  if (write_normals) {
+    const int* const index = m_index.data() + r.node_begin;
     for (int k = 0; k < n_nodes; ++k) {
       const Vec3 sum(nsum[k].v[0], nsum[k].v[1], nsum[k].v[2]);
       const double len = sum.norm();
-      normal[k] = len > 0.0 ? Vec3(sign * sum / len) : Vec3(sign * sum);
+      p.normal[index[k]] = len > 0.0 ? Vec3(sign * sum / len) : Vec3(sign * sum);
     }
   }
   return true;
@@ -1432,18 +1436,14 @@ bool FusedMembranePlan::run(const OifLocalForces& local_ia, const BondGroup& loc
       ++m_n_builds;
       return m_usable && run(local_ia, local, global_ia, global, write_normals, p, box);
     }
-    if (!evaluate_cell(cell, local_ia, global_ia, write_normals))
+    if (!evaluate_cell(cell, local_ia, global_ia, write_normals, p))
       return false;
   }
-  // one pass over the particles (their arrays are out of cache by now)
-  if (write_normals)
-    for (std::size_t s = 0; s < m_index.size(); ++s) {
-      p.force[m_index[s]] += m_f[s];
-      p.normal[m_index[s]] = m_normal[s];
-    }
-  else
-    for (std::size_t s = 0; s < m_index.size(); ++s)
-      p.force[m_index[s]] += m_f[s];
+  // the forces in one pass over the particles once every cell succeeded (a
+  // cell that declines hands the whole group to the separate plans or the
+  // generic loop, which add them all)
+  for (std::size_t s = 0; s < m_index.size(); ++s)
+    p.force[m_index[s]] += m_f[s];
   return true;
 }
 

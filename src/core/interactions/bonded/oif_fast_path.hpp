@@ -273,10 +273,11 @@ private:
    *  a periodic axis or a node's mol_id changed (*regroup set). */
   bool gather_cell(std::size_t cell, const ParticleStore& p, const BoxGeometry& box,
                    bool velocities, bool* regroup);
-  /** Forces (and normals) of one cell into m_f (m_normal); false on a
-   *  degenerate triangle or edge or a non-finite force. */
+  /** Forces of one cell into m_f, its normals (write_normals) into the
+   *  particles; false on a degenerate triangle or edge or a non-finite
+   *  force. */
   bool evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
-                     const OifGlobalForces& global_ia, bool write_normals);
+                     const OifGlobalForces& global_ia, bool write_normals, ParticleStore& p);
 
   CachedGroupComparison m_same_particles;
 
@@ -320,8 +321,7 @@ private:
   /// only: this scratch leaves L2 at every lattice sweep and is read back
   /// from L3 once per step, so it is kept small
   std::vector<double> m_tri;
-  std::vector<Vec3> m_f;      ///< slot -> force of this step
-  std::vector<Vec3> m_normal; ///< slot -> unit normal (write_normals)
+  std::vector<Vec3> m_f; ///< slot -> force of this step
 };
 
 } // namespace pyoif::oif
