@@ -234,24 +234,27 @@ void System::add_langevin_forces() {
   }
 }
 
-template <bool with_energy> void System::force_loop(Energies* e, bool forces_preset) {
+template <bool with_energy>
+void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
   auto& p = particles;
   if (!forces_preset)
     for (std::size_t i = 0; i < p.n_local(); ++i)
       p.force[i] = p.ext_force[i];
-  PhaseClock clock(m_timing && !with_energy);
+  RunTimings untimed;
+  RunTimings& t = timings ? *timings : untimed;
+  PhaseClock clock(timings != nullptr);
   add_bonded_forces(e);
-  clock.lap(run_timings.bonded);
+  clock.lap(t.bonded);
   add_nonbonded_forces(e);
-  clock.lap(run_timings.non_bonded);
+  clock.lap(t.non_bonded);
   add_constraint_forces(e);
-  clock.lap(run_timings.constraints);
+  clock.lap(t.constraints);
   if constexpr (!with_energy) {
     if (m_langevin.active && m_langevin.gamma > 0.0)
       add_langevin_forces();
     if (m_lb && m_lb_coupling.active)
       lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
-    clock.lap(run_timings.coupling);
+    clock.lap(t.coupling);
   }
 }
 
@@ -323,15 +326,11 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // a run may start with (stale forces: first run, changed parameters,
   // recalc_forces), which would inflate the time per step of short runs
   // (LAMMPS likewise reports its setup apart from the loop)
-  struct RunClock {
-    System& s;
+  struct TotalClock {
+    double& total;
     PhaseClock clock{true};
-    explicit RunClock(System& sys) : s(sys) { s.m_timing = true; }
-    ~RunClock() {
-      s.m_timing = false;
-      clock.lap(s.run_timings.total);
-    }
-  } run_clock(*this);
+    ~TotalClock() { clock.lap(total); }
+  } total_clock{run_timings.total};
   const double dt = m_time_step;
   const int lb_interval = lb_steps_per_update();
   // Velocity Verlet. The half kick dt / 2m per particle is computed once per
@@ -429,7 +428,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     time += dt;
     prepare_step(moved);
     // after the fused pass the forces already hold the external forces
-    force_loop<false>(nullptr, step > 0 && moved >= 0);
+    force_loop<false>(nullptr, step > 0 && moved >= 0, &run_timings);
     const bool last = step + 1 == n_steps;
     if (last)
       second_kick();

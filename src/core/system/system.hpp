@@ -190,8 +190,10 @@ private:
    *  already tested the displacements (1 beyond the skin, 0 not); -1: test. */
   void prepare_step(int moved = -1);
   /** All forces; forces_preset: the local forces already hold the external
-   *  forces (the integrator's fused pass set them). */
-  template <bool with_energy> void force_loop(Energies* e, bool forces_preset = false);
+   *  forces (the integrator's fused pass set them); timings: where the
+   *  phases' time is added (the time steps of a run), or none. */
+  template <bool with_energy>
+  void force_loop(Energies* e, bool forces_preset = false, RunTimings* timings = nullptr);
   void add_bonded_forces(Energies* e);
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
@@ -223,8 +225,6 @@ private:
   double m_time_step = 0.01;
   bool m_forces_valid = false;
   int m_lb_substep = 0;
-  /// inside integrate(): force_loop adds its phases to run_timings
-  bool m_timing = false;
 };
 
 } // namespace pyoif

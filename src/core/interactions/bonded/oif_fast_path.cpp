@@ -1087,6 +1087,17 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
   return true;
 }
 
+template <class F> void FusedMembranePlan::for_each_cell_table(F&& f) {
+  for (auto* table : {&m_tri_v0, &m_tri_v1, &m_tri_v2})
+    f(*table, false);
+  for (auto* table : {&m_tri_weight, &m_tri_area0})
+    f(*table, false);
+  for (auto* table : {&m_edge_b, &m_edge_a, &m_edge_c, &m_edge_d})
+    f(*table, true);
+  for (auto* table : {&m_edge_r0, &m_edge_inv_r0, &m_edge_cos_psi0, &m_edge_sin_psi0})
+    f(*table, true);
+}
+
 void FusedMembranePlan::share_cell_tables() {
   // Cells of one OifCellType have the same triangles and edges as cell-local
   // node indices, and the same reference values: they share one copy of
@@ -1094,68 +1105,58 @@ void FusedMembranePlan::share_cell_tables() {
   // instead of streaming a copy per cell through L3, where it competes with
   // the lattice (at 60 cells the copies were about 4 MB). A cell whose tables
   // differ in any bit keeps its own. The arithmetic is unchanged.
-  std::vector<int> tv0, tv1, tv2, eb, ea, ec, ed;
-  std::vector<double> tw, ta, er0, einv, ecos, esin;
-  std::vector<std::size_t> templates; // cells whose tables were copied
-  auto same = [](const auto& old_table, int old_begin, const auto& new_table, int new_begin,
-                 int n) {
-    return n == 0 || std::memcmp(old_table.data() + old_begin, new_table.data() + new_begin,
-                                 sizeof(old_table[0]) * static_cast<std::size_t>(n)) == 0;
+  auto range = [](const CellRange& r, bool edges) {
+    return edges ? std::pair{r.edge_begin, r.edge_end - r.edge_begin}
+                 : std::pair{r.triangle_begin, r.triangle_end - r.triangle_begin};
   };
+  // each cell's template: the first cell with bit-for-bit the same tables
+  std::vector<std::size_t> template_of(m_cells.size()), templates;
   for (std::size_t c = 0; c < m_cells.size(); ++c) {
-    CellRange& r = m_cells[c];
-    const int nt = r.triangle_end - r.triangle_begin, ne = r.edge_end - r.edge_begin;
-    const CellRange* match = nullptr;
+    template_of[c] = c;
     for (std::size_t t : templates) {
-      const CellRange& q = m_cells[t]; // already pointing into the new tables
-      if (q.triangle_end - q.triangle_begin != nt || q.edge_end - q.edge_begin != ne)
-        continue;
-      const int a = r.triangle_begin, b = q.triangle_begin, e = r.edge_begin, f = q.edge_begin;
-      if (same(m_tri_v0, a, tv0, b, nt) && same(m_tri_v1, a, tv1, b, nt) &&
-          same(m_tri_v2, a, tv2, b, nt) && same(m_tri_weight, a, tw, b, nt) &&
-          same(m_tri_area0, a, ta, b, nt) && same(m_edge_b, e, eb, f, ne) &&
-          same(m_edge_a, e, ea, f, ne) && same(m_edge_c, e, ec, f, ne) &&
-          same(m_edge_d, e, ed, f, ne) && same(m_edge_r0, e, er0, f, ne) &&
-          same(m_edge_inv_r0, e, einv, f, ne) && same(m_edge_cos_psi0, e, ecos, f, ne) &&
-          same(m_edge_sin_psi0, e, esin, f, ne)) {
-        match = &q;
+      bool equal = true;
+      for_each_cell_table([&](const auto& table, bool edges) {
+        const auto [a, n] = range(m_cells[c], edges);
+        const auto [b, m] = range(m_cells[t], edges);
+        equal = equal && n == m &&
+                (n == 0 || std::memcmp(table.data() + a, table.data() + b,
+                                       sizeof(table[0]) * static_cast<std::size_t>(n)) == 0);
+      });
+      if (equal) {
+        template_of[c] = t;
         break;
       }
     }
-    if (match) {
-      r.triangle_begin = match->triangle_begin;
-      r.triangle_end = match->triangle_end;
-      r.edge_begin = match->edge_begin;
-      r.edge_end = match->edge_end;
-      continue;
-    }
-    auto append = [](auto& to, const auto& from, int begin, int n) {
-      to.insert(to.end(), from.begin() + begin, from.begin() + begin + n);
-    };
-    const int new_t = static_cast<int>(tv0.size()), new_e = static_cast<int>(eb.size());
-    for (auto [to, from] : {std::pair{&tv0, &m_tri_v0}, {&tv1, &m_tri_v1}, {&tv2, &m_tri_v2}})
-      append(*to, *from, r.triangle_begin, nt);
-    for (auto [to, from] : {std::pair{&tw, &m_tri_weight}, {&ta, &m_tri_area0}})
-      append(*to, *from, r.triangle_begin, nt);
-    for (auto [to, from] :
-         {std::pair{&eb, &m_edge_b}, {&ea, &m_edge_a}, {&ec, &m_edge_c}, {&ed, &m_edge_d}})
-      append(*to, *from, r.edge_begin, ne);
-    for (auto [to, from] : {std::pair{&er0, &m_edge_r0},
-                            {&einv, &m_edge_inv_r0},
-                            {&ecos, &m_edge_cos_psi0},
-                            {&esin, &m_edge_sin_psi0}})
-      append(*to, *from, r.edge_begin, ne);
-    r.triangle_begin = new_t;
-    r.triangle_end = new_t + nt;
-    r.edge_begin = new_e;
-    r.edge_end = new_e + ne;
-    templates.push_back(c);
+    if (template_of[c] == c)
+      templates.push_back(c);
   }
-  m_tri_v0.swap(tv0), m_tri_v1.swap(tv1), m_tri_v2.swap(tv2);
-  m_tri_weight.swap(tw), m_tri_area0.swap(ta);
-  m_edge_b.swap(eb), m_edge_a.swap(ea), m_edge_c.swap(ec), m_edge_d.swap(ed);
-  m_edge_r0.swap(er0), m_edge_inv_r0.swap(einv), m_edge_cos_psi0.swap(ecos),
-      m_edge_sin_psi0.swap(esin);
+  // the tables keep the templates' ranges, one after the other
+  for_each_cell_table([&](auto& table, bool edges) {
+    std::decay_t<decltype(table)> shared;
+    for (std::size_t t : templates) {
+      const auto [a, n] = range(m_cells[t], edges);
+      shared.insert(shared.end(), table.begin() + a, table.begin() + a + n);
+    }
+    table.swap(shared);
+  });
+  std::vector<CellRange> moved(m_cells.size());
+  int triangles = 0, edges = 0;
+  for (std::size_t t : templates) {
+    CellRange& r = moved[t];
+    r = m_cells[t];
+    r.triangle_begin = triangles;
+    r.triangle_end = triangles += m_cells[t].triangle_end - m_cells[t].triangle_begin;
+    r.edge_begin = edges;
+    r.edge_end = edges += m_cells[t].edge_end - m_cells[t].edge_begin;
+  }
+  for (std::size_t c = 0; c < m_cells.size(); ++c) {
+    const CellRange& t = moved[template_of[c]];
+    CellRange& r = m_cells[c];
+    r.triangle_begin = t.triangle_begin;
+    r.triangle_end = t.triangle_end;
+    r.edge_begin = t.edge_begin;
+    r.edge_end = t.edge_end;
+  }
 }
 
 bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,

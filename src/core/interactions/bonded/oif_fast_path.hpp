@@ -296,6 +296,9 @@ private:
   /** Cells with identical triangle and edge tables point to one copy
    *  (their ranges rewritten); called at the end of a build. */
   void share_cell_tables();
+  /** f(table, edges) for each table a CellRange indexes: the per-triangle
+   *  ones (edges false), then the per-edge ones. */
+  template <class F> void for_each_cell_table(F&& f);
   std::vector<int> m_index;    ///< slot -> local particle index
   std::vector<int> m_slot_mol; ///< slot -> mol_id at build
   // triangles (global group order within a cell), vertices as cell-local
