@@ -342,32 +342,42 @@ void bind_system(py::module_& m) {
               return;
             }
             struct Interrupted {};
-            int remaining = steps;
-            while (true) {
-              SigintNote note; // our C handler while the loop runs
-              s.interruption_point = [] {
-                if (SigintNote::pending())
-                  throw Interrupted{};
-              };
-              const std::uint64_t start = s.step_count;
-              try {
-                s.integrate(remaining, recalc_forces, reuse_forces);
-                s.interruption_point = nullptr;
-                return;
-              } catch (const Interrupted&) {
-                s.interruption_point = nullptr;
-              } catch (...) {
-                s.interruption_point = nullptr;
-                throw;
-              }
-              remaining -= static_cast<int>(s.step_count - start);
-              recalc_forces = reuse_forces = false; // the forces are those of the last step
-              note.restore();
-              // the signal, handed to Python's own machinery now that the
-              // state is consistent: its handler runs here
+            struct ClearPoint {
+              System& s;
+              ~ClearPoint() { s.interruption_point = nullptr; }
+            } clear_point{s};
+            s.interruption_point = [] {
+              if (SigintNote::pending())
+                throw Interrupted{};
+            };
+            // the signal, handed to Python's own machinery once the state is
+            // consistent: its handler runs here
+            auto hand_to_python = [] {
               PyErr_SetInterrupt();
               if (PyErr_CheckSignals() != 0)
                 throw py::error_already_set();
+            };
+            int remaining = steps;
+            while (true) {
+              SigintNote note; // our C handler while the loop runs
+              const std::uint64_t start = s.step_count;
+              bool finished = false;
+              try {
+                s.integrate(remaining, recalc_forces, reuse_forces);
+                finished = true;
+              } catch (const Interrupted&) {
+              }
+              note.restore();
+              if (finished) {
+                // a signal after the last interruption point (a run shorter
+                // than 16 steps, its last steps): handled after the run
+                if (SigintNote::pending())
+                  hand_to_python();
+                return;
+              }
+              remaining -= static_cast<int>(s.step_count - start);
+              recalc_forces = reuse_forces = false; // the forces are those of the last step
+              hand_to_python();
             }
           },
           py::arg("steps"), py::arg("recalc_forces") = false, py::arg("reuse_forces") = false,
