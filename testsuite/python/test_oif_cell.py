@@ -299,6 +299,13 @@ class TestOifCell(unittest.TestCase):
                 oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
         self.assertEqual(len(self.system.part), 0)
         self.assertEqual(self.system.max_oif_objects, 0)
+        # the last cell id: refused before anything is added (it used to add
+        # the particles, then fail to advance the counter)
+        self.system.max_oif_objects = 2**31 - 1
+        with self.assertRaisesRegex(ValueError, "no cell ids left"):
+            oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
+        self.assertEqual(len(self.system.part), 0)
+        self.system.max_oif_objects = 0
         cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15], rotation_ids=[5])
         self.assertEqual(cell.cell_id, 0)
         self.assertEqual(len(self.system.part), 374)

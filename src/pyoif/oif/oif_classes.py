@@ -838,7 +838,7 @@ class OifCell:
         # cell ids never repeat (a stale cell object is recognised by its mol_id);
         # the counter advances only once the cell is complete
         cell_id = int(system.max_oif_objects)
-        if cell_id > _INT32_MAX:
+        if cell_id >= _INT32_MAX:  # the counter could not advance past it
             raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
         pos = cell_type.mesh._placed_positions(origin, rotate)
         check_periodic_extent(owner, system, pos, cell_type.mesh.max_edge_length())
