@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <sstream>
 
 #ifdef PYOIF_WITH_OPENMP
 #include <omp.h>

@@ -48,7 +48,7 @@ int System::add_particle(int pid, const Vec3& pos, const Vec3& vel, double mass,
                          int mol_id, const Vec3& ext_force, std::uint8_t fixed) {
   if (pid < 0)
     pid = particles.max_id() + 1;
-  if (pid < 0 || pid >= std::numeric_limits<int>::max())
+  if (pid >= std::numeric_limits<int>::max())
     throw InputError("id: particle ids must be in 0.." +
                      std::to_string(std::numeric_limits<int>::max() - 1));
   if (particles.index(pid) >= 0)

@@ -39,6 +39,9 @@ using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>
 void bind_interactions(py::module_& m) {
   auto sys = py::reinterpret_borrow<py::class_<System, std::shared_ptr<System>>>(m.attr("System"));
 
+  // the largest particle type of the non-bonded table (Python checks keys against it)
+  m.attr("MAX_PARTICLE_TYPE") = NonbondedTable::max_type;
+
   // ---- non-bonded models ----------------------------------------------------
   py::class_<SoftSphere::Params>(m, "SoftSphereParams")
       .def(py::init([](double a, double n, double cutoff, double offset) {

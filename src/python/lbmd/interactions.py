@@ -114,8 +114,10 @@ class NonBondedInteractions:
         if not (isinstance(key, tuple) and len(key) == 2):
             raise TypeError("non_bonded_inter: index with two particle types, e.g. [0, 1]")
         for t in key:
-            if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or not 0 <= t <= 1023:
-                raise ValueError(f"non_bonded_inter: particle types must be integers in 0..1023, got {t!r}")
+            if (isinstance(t, bool) or not isinstance(t, (int, np.integer))
+                    or not 0 <= t <= _lbmd.MAX_PARTICLE_TYPE):
+                raise ValueError(f"non_bonded_inter: particle types must be integers in "
+                                 f"0..{_lbmd.MAX_PARTICLE_TYPE}, got {t!r}")
         return NonBondedTypePair(self._system, int(key[0]), int(key[1]))
 
 

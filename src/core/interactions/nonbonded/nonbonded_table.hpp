@@ -78,10 +78,11 @@ public:
   double max_range() const { return m_max_range; }
   int n_types() const { return m_n_types; }
 
-private:
   /** The table is dense in the largest type: 1024 types are 10^6 entries
    *  (about 100 MB); beyond, a typo would ask for gigabytes. */
   static constexpr int max_type = 1023;
+
+private:
   static void check_type(int t) {
     if (t < 0 || t > max_type)
       throw InputError("non-bonded interactions: particle types must be integers in 0.." +
