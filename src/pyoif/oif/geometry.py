@@ -8,6 +8,8 @@ corners, and its size is the one of PyOIF's ``angle_btw_triangles``
 """
 import numpy as np
 
+from .mesh_io import signed_volume
+
 
 def triangle_normals(nodes, tris):
     """Unnormalised (B - A) x (C - A) of every row (A, B, C)."""
@@ -25,16 +27,9 @@ def surface(nodes, tris):
 
 def volume(nodes, tris):
     """Enclosed volume for PyOIF-oriented triangles (inward normals):
-    divergence theorem V = -1/6 sum A . (B x C). Positions are taken
-    relative to the first node of the first triangle (as the engine does):
-    the sum of large terms that cancel would lose the volume of a cell far
-    from the origin to rounding."""
-    tris = np.asarray(tris)
-    if len(tris) == 0:
-        return 0.0
-    ref = nodes[tris[0, 0]]
-    a, b, c = (nodes[tris[:, k]] - ref for k in range(3))
-    return float(-np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0) + 0.0  # + 0.0 turns -0.0 into 0.0
+    minus mesh_io.signed_volume (divergence theorem, positions relative to
+    one node, as the engine takes them)."""
+    return 0.0 - signed_volume(nodes, np.asarray(tris))  # 0.0 - x: never -0.0
 
 
 def dihedral_angles(nodes, angles):

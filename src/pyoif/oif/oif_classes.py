@@ -857,15 +857,18 @@ class OifCell:
             self._add_bonds(rings, self_cell_cutoff)
             self.set_rotation(rotation_ids)
         except BaseException:
-            # no half-built cell stays behind: removing the particles removes
-            # their bonds and exclusions too
-            try:
-                self.mesh._parts.remove()
-            except Exception:  # pragma: no cover - report the original error
-                pass
+            self._discard()  # no half-built cell stays behind
             raise
         system.max_oif_objects = cell_id + 1
         _CELLS.add(self)
+
+    def _discard(self):
+        """Removes the cell's particles (and so their bonds and exclusions)
+        while an error is being raised: a failure here must not hide it."""
+        try:
+            self.mesh._parts.remove()
+        except Exception:  # pragma: no cover - the original error is reported
+            pass
 
     def _add_bonds(self, rings, self_cell_cutoff):
         cell_type, system = self.cell_type, self.system

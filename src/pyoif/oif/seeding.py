@@ -402,12 +402,8 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
                                  rotate=angles, particle_mass=particle_mass,
                                  exclusion_neighbours=exclusion_neighbours, self_cell_cutoff=self_cell_cutoff))
     except BaseException:
-        # all or nothing: remove the cells this call created (with their bonds)
-        for c in cells:
-            try:
-                c.mesh._parts.remove()
-            except Exception:  # pragma: no cover - report the original error
-                pass
+        for c in cells:  # all or nothing: the cells this call created go again
+            c._discard()
         raise
     return cells
 
