@@ -157,6 +157,13 @@ py::array get_scalars(const System& s, const std::string& field, const IdArray& 
 }
 
 void set_scalars(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  enum class Scalar { mass, type, mol_id, fix };
+  const Scalar which = field == "mass"     ? Scalar::mass
+                       : field == "type"   ? Scalar::type
+                       : field == "mol_id" ? Scalar::mol_id
+                       : field == "fix"
+                           ? Scalar::fix
+                           : throw InputError("property '" + field + "' cannot be set");
   const auto idx = indices_of(s, ids);
   if (values.ndim() != 1 || values.shape(0) != static_cast<py::ssize_t>(idx.size()))
     throw InputError(field + ": expected " + std::to_string(idx.size()) + " values");
@@ -171,32 +178,48 @@ void set_scalars(System& s, const std::string& field, const IdArray& ids, const 
   // all values are checked before any is set: a refused slice stays as it was
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const double x = r(n);
-    if (field == "mass" && (!(x > 0.0) || !std::isfinite(x)))
-      throw InputError("mass must be a finite positive number, got " + format_number(x));
-    if (field == "type" && !integral_in(x, 0.0, int_max))
-      throw InputError("type must be an integer in 0..2147483647, got " + format_number(x));
-    if (field == "mol_id" && !integral_in(x, int_min, int_max))
-      throw InputError("mol_id must be an integer, got " + format_number(x));
-    if (field == "fix" && !integral_in(x, 0.0, 7.0))
-      throw InputError("fix must be a mask of 3 flags (0..7), got " + format_number(x));
-    if (field != "mass" && field != "type" && field != "mol_id" && field != "fix")
-      throw InputError("property '" + field + "' cannot be set");
+    switch (which) {
+    case Scalar::mass:
+      if (!(x > 0.0) || !std::isfinite(x))
+        throw InputError("mass must be a finite positive number, got " + format_number(x));
+      break;
+    case Scalar::type:
+      if (!integral_in(x, 0.0, int_max))
+        throw InputError("type must be an integer in 0.." +
+                         std::to_string(std::numeric_limits<int>::max()) + ", got " +
+                         format_number(x));
+      break;
+    case Scalar::mol_id:
+      if (!integral_in(x, int_min, int_max))
+        throw InputError("mol_id must be an integer, got " + format_number(x));
+      break;
+    case Scalar::fix:
+      if (!integral_in(x, 0.0, 7.0))
+        throw InputError("fix must be a mask of 3 flags (0..7), got " + format_number(x));
+      break;
+    }
   }
   for (std::size_t n = 0; n < idx.size(); ++n) {
     const int i = idx[n];
     const double x = r(n);
-    if (field == "mass")
+    switch (which) {
+    case Scalar::mass:
       p.mass[i] = x;
-    else if (field == "type")
+      break;
+    case Scalar::type:
       p.type[i] = static_cast<int>(x);
-    else if (field == "mol_id")
+      break;
+    case Scalar::mol_id:
       p.mol_id[i] = static_cast<int>(x);
-    else
+      break;
+    case Scalar::fix:
       p.fixed[i] = static_cast<std::uint8_t>(x);
+      break;
+    }
   }
-  if (field == "type")
+  if (which == Scalar::type)
     s.cells.invalidate();
-  if (field == "type" || field == "mol_id") // the interactions that apply change
+  if (which == Scalar::type || which == Scalar::mol_id) // the interactions that apply change
     s.invalidate_forces();
 }
 
