@@ -247,8 +247,13 @@ IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const
                             Vec3(f_r(i, 0), f_r(i, 1), f_r(i, 2)),
                             static_cast<std::uint8_t>(fix_r(i)));
   } catch (...) {
+    // particles just added have no bonds or exclusions (removing a particle
+    // removes those of its id): taking them out of the store is enough, not
+    // System::remove_particle's pass over every bond group per particle
     for (py::ssize_t i = added - 1; i >= 0; --i)
-      s.remove_particle(w(i));
+      s.particles.remove(w(i));
+    s.cells.invalidate();
+    s.invalidate_forces();
     throw;
   }
   return out;
