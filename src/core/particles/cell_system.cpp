@@ -27,7 +27,7 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
 }
 
 void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut) {
-  m_blowup_distance = 1e9 * box.length().maxCoeff();
+  m_blowup_distance = box.image_range();
   for (std::size_t i = 0; i < p.n_local(); ++i)
     box.fold(p.pos[i], p.image[i]);
   m_pos_at_rebuild = p.pos;

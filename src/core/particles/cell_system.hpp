@@ -42,9 +42,10 @@ public:
   double displacement_limit2() const { return 0.25 * skin * skin; }
   /** Whether position x is non-finite or runaway (needs_rebuild throws on it). */
   bool runaway(const Vec3& x) const {
-    // Beyond 1e9 box lengths a particle has certainly blown up (and folding
-    // would overflow the image counter).
-    return !std::isfinite(x[0] + x[1] + x[2]) || x.cwiseAbs().maxCoeff() > m_blowup_distance;
+    // beyond BoxGeometry::image_range() a particle has certainly blown up
+    // (and folding would overflow the image counter)
+    return !std::isfinite(x[0] + x[1] + x[2]) ||
+           (x.cwiseAbs().array() > m_blowup_distance.array()).any();
   }
   void invalidate() { m_valid = false; }
   /** Refresh ghost positions from their origins (MPI: ghost exchange). */
@@ -109,7 +110,7 @@ private:
 
   bool m_valid = false;
   double m_range = 0.0;
-  double m_blowup_distance = 1e300;
+  Vec3 m_blowup_distance = Vec3::Constant(1e300); ///< per axis (BoxGeometry::image_range)
   std::size_t m_n_rebuilds = 0;
   std::vector<Vec3> m_pos_at_rebuild;
   std::vector<std::array<int, 2>> m_pairs;

@@ -29,6 +29,10 @@ public:
   const std::array<bool, 3>& periodic() const { return m_periodic; }
   void set_periodic(const std::array<bool, 3>& p) { m_periodic = p; }
   double volume() const { return m_length.prod(); }
+  /** Per axis the distance from the box beyond which a position's image
+   *  counter (an int) would overflow when folded: 1e9 box lengths. Input
+   *  beyond it is refused; a particle that flies that far has blown up. */
+  Vec3 image_range() const { return 1e9 * m_length; }
 
   /** Vector from b to a, shortest over periodic images. */
   Vec3 minimum_image(const Vec3& a, const Vec3& b) const {
@@ -72,4 +76,4 @@ private:
   std::array<bool, 3> m_periodic = {true, true, true};
 };
 
-}  // namespace pyoif
+} // namespace pyoif

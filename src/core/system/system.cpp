@@ -106,7 +106,7 @@ void System::check_position_range(const Vec3& pos, int pid) const {
   // overflow when the position is folded (the integrator stops a particle
   // that flies that far as a blow-up)
   for (int d = 0; d < 3; ++d)
-    if (std::abs(pos[d]) > 1e9 * box.length()[d])
+    if (std::abs(pos[d]) > box.image_range()[d])
       throw InputError("pos: particle " + std::to_string(pid) + " at " + format_number(pos[d]) +
                        " along axis " + std::to_string(d) +
                        " is more than 1e9 box lengths from the box; positions must be within that");
