@@ -84,11 +84,7 @@ def _read_table(path, ncols, kind, what):
         raise ValueError(f"mesh input: cannot read {what} file '{path}': {e.strerror or e}") from None
     if not rows:
         raise ValueError(f"mesh input: {what} file '{path}' contains no data")
-    dtype = np.int64 if kind is int else float
-    try:
-        return np.array(rows, dtype=dtype), np.array(lines)
-    except OverflowError:  # pragma: no cover - values are range-checked above
-        raise ValueError(f"mesh input: {what} file '{path}' has a value out of range") from None
+    return np.array(rows, dtype=np.int64 if kind is int else float), np.array(lines)
 
 
 def _first_undecodable_line(path):

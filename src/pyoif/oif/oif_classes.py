@@ -82,8 +82,6 @@ def live_cells(system):
     return sorted(out, key=lambda c: c.cell_id)  # reproducible order
 
 
-#: particle types, mol_ids and ids are int32 in the engine
-
 
 def _exclusion_rings(owner, exclusion_neighbours):
     """Number of edge rings excluded from self-cell contacts."""

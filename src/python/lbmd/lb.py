@@ -31,7 +31,7 @@ def _threads_param():
     # script written for a big node must still run on a laptop; absurd counts
     # are refused (a failed thread creation would end the interpreter
     # inside OpenMP)
-    limit = max(256, 4 * _cpus())  # a script from a big node still runs on a laptop
+    limit = max(256, 4 * _cpus())
     return Param("n_threads", "int", 0, check=(lambda n: 0 <= n <= limit, f"in 0..{limit}"))
 
 
