@@ -21,7 +21,7 @@ import numpy as np
 
 import lbmd
 from lbmd.particle_data import ParticleHandle
-from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int
+from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, vector3 as _vector3
 
 from . import geometry as geo
 from . import mesh_io
@@ -45,19 +45,7 @@ def _real(owner, name, value, check=None):
 
 
 def _vec3(owner, name, value, positive=False):
-    try:
-        raw = np.asarray(value)
-        # strings would convert silently ('1' -> 1.0): accept real numbers only
-        if raw.dtype.kind not in "iuf":
-            raise TypeError
-        arr = raw.astype(float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{owner}: parameter '{name}' must be 3 numbers, got {value!r}") from None
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{owner}: parameter '{name}' must be 3 finite numbers, got {value!r}")
-    if positive and not np.all(arr > 0):
-        raise ValueError(f"{owner}: parameter '{name}' must be positive in every component, got {value!r}")
-    return arr
+    return _vector3(f"{owner}: parameter '{name}'", value, positive)
 
 
 def _check_system(owner, system):

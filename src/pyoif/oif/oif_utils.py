@@ -12,6 +12,8 @@ import os
 
 import numpy as np
 
+from lbmd.validation import vector3 as _vector3
+
 from . import vtk as _vtk
 
 small_epsilon = 1e-9
@@ -145,10 +147,7 @@ def _checked(owner, name, value, kind):
                 or not np.isfinite(value) or value < 0):
             raise ValueError(f"{owner}: '{name}' must be a finite number >= 0, got {value!r}")
         return float(value)
-    raw = np.asarray(value)
-    if raw.dtype.kind not in "iuf" or raw.shape != (3,) or not np.all(np.isfinite(raw)):
-        raise ValueError(f"{owner}: '{name}' must be 3 finite numbers, got {value!r}")
-    arr = raw.astype(float)
+    arr = _vector3(f"{owner}: '{name}'", value)
     if kind == "dir" and not np.any(arr != 0):
         raise ValueError(f"{owner}: '{name}' must not be the zero vector (it is a direction)")
     return arr

@@ -83,10 +83,13 @@ def output_path(path, owner="output"):
 def write_text(path, text, owner="output"):
     """Write text to path through a temporary file in the same folder, renamed
     over the target at the end (readers never see a half-written file); the
-    temporary file is removed on any failure."""
-    real = output_path(path, owner)
+    temporary file is removed on any failure. The name is checked and the
+    folder created by the writing rank only, which hands its outcome to the
+    others (on_writer): a check that came out differently on another rank
+    (a node-local folder) cannot make one rank raise alone."""
 
     def write():
+        real = output_path(path, owner)
         tmp = real + ".tmp"
         try:
             with open(tmp, "w") as f:
@@ -136,7 +139,6 @@ def write_polydata(path, points, polygons=None, lines=None, point_data=None, tit
     """Write points (N x 3), optional polygons (list of index lists or M x k
     array), lines (list of index lists) and point_data {name: N values or
     N x 3 vectors} to `path` (parent folder created if missing)."""
-    output_path(path, "VTK output")  # name errors before any work
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     arrays = _point_arrays(point_data, n)

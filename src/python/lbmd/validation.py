@@ -55,18 +55,7 @@ class Param:
                 raise TypeError(f"{where} must be True or False, got {value!r}")
             value = bool(value)
         elif k == "vec3":
-            try:
-                raw = np.asarray(value)
-                if raw.dtype.kind not in "iuf":  # no strings or booleans for numbers
-                    raise TypeError
-                arr = raw.astype(float)
-            except (TypeError, ValueError):
-                raise TypeError(f"{where} must be 3 numbers, got {value!r}") from None
-            if arr.shape != (3,):
-                raise ValueError(f"{where} must be 3 numbers, got {value!r}")
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{where} must be finite, got {value!r}")
-            value = arr
+            value = vector3(where, value)
         elif k == "bool3":
             arr = np.asarray(value)
             if arr.shape != (3,) or arr.dtype != bool:
@@ -102,6 +91,26 @@ def parse(owner, params, kwargs):
         else:
             out[p.name] = p.default
     return out
+
+
+def vector3(where, value, positive=False):
+    """value as an array of 3 finite floats; `where` names what is checked
+    (e.g. "OifCell: parameter 'origin'"). TypeError for what is not numbers
+    (strings would convert silently, '1' -> 1.0; booleans, None), ValueError
+    for another count, a component that is not finite or, with `positive`,
+    one that is <= 0."""
+    try:
+        raw = np.asarray(value)
+        if raw.dtype.kind not in "iuf":
+            raise TypeError
+        arr = raw.astype(float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{where} must be 3 numbers, got {value!r}") from None
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{where} must be 3 finite numbers, got {value!r}")
+    if positive and not np.all(arr > 0):
+        raise ValueError(f"{where} must be positive in every component, got {value!r}")
+    return arr
 
 
 def is_whole_number(value):
