@@ -175,6 +175,22 @@ def main():
         if n and base_phases is not None:  # where the extra time goes (wall clock, same run)
             print("           per cell by phase (wall s / 1000 steps): " + ", ".join(
                 f"{key} {(phases[key] - base_phases[key]) / n:.4f}" for key in PHASES))
+    # T(N) - T(0) = fixed + N * marginal over the cell counts measured: the
+    # marginal cost is what one more cell adds; the fixed part is paid once
+    # for having cells at all (see doc/performance.md: after the lattice
+    # sweep the core runs the first milliseconds of cell work slower)
+    counts = [n for n in args.cells if n > 0]
+    if base is not None and len(counts) >= 2:
+        extra_total = [results[args.cells.index(n)][0] - base for n in counts]
+        marginal, fixed = np.polyfit(counts, extra_total, 1)
+        print(f"fit over {'/'.join(map(str, counts))} cells: {marginal:.4f} {unit} / 1000 steps per cell "
+              f"(what one more cell adds) + {fixed:.4f} {unit} / 1000 steps for having cells at all")
+        rows.append({"cells": "fit_marginal_per_cell", "fluid": not args.no_fluid, "measure": unit,
+                     "s_per_1000_steps": "", "extra_s_per_cell_per_1000_steps": marginal,
+                     "wall_s_per_1000_steps": ""})
+        rows.append({"cells": "fit_fixed", "fluid": not args.no_fluid, "measure": unit,
+                     "s_per_1000_steps": fixed, "extra_s_per_cell_per_1000_steps": "",
+                     "wall_s_per_1000_steps": ""})
     rows.append({"cells": "create_one_cell_s", "fluid": "", "measure": "wall s", "s_per_1000_steps": t_create,
                  "extra_s_per_cell_per_1000_steps": "", "wall_s_per_1000_steps": ""})
     write_rows(args.csv, rows)
