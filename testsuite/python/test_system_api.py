@@ -63,10 +63,19 @@ class SystemApi(unittest.TestCase):
             return subprocess.Popen(["sh", "-c", f"sleep 0.5; kill -INT {os.getpid()}"])
 
         s = make()
-        killer = send_sigint_soon()
-        with self.assertRaises(KeyboardInterrupt):
-            s.integrator.run(2**31 - 1)  # days at this speed
-        killer.wait()
+        # the same process ends this one with SIGTERM a minute later, should
+        # the interrupt be lost: the test then fails at once instead of
+        # running into CTest's timeout
+        killer = subprocess.Popen(["sh", "-c", f"sleep 0.5; kill -INT {os.getpid()}; "
+                                               f"sleep 60; kill -TERM {os.getpid()}"],
+                                  start_new_session=True, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
+        try:
+            with self.assertRaises(KeyboardInterrupt):
+                s.integrator.run(2**31 - 1)  # days at this speed
+        finally:
+            os.killpg(killer.pid, signal.SIGKILL)  # the shell and its sleep, before the TERM
+            killer.wait()
         steps = round(s.time / s.time_step)
         self.assertGreater(steps, 0)
         self.assertEqual(steps % 16, 0)
