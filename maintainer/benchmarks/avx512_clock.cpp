@@ -1,0 +1,128 @@
+// How long code runs slower after dense 512-bit floating-point work.
+//
+// Intel cores lower their clock while they execute dense AVX-512 floating
+// point ("licence" levels) and return to the higher clock only some time
+// after the last such instruction. The lattice kernel is such work; the cell
+// passes that follow it in a time step run in that time. This program
+// measures the effect: a scalar dependent chain (clock-bound, no memory) is
+// timed in chunks of a few tens of microseconds right after 2 ms of 512-bit
+// FMAs, right after 2 ms of 256-bit FMAs, and in steady state.
+//
+//     build/avx512_clock [--csv avx512_clock.csv]
+//
+// Prints how much slower the chunks ran than in steady state, in spells of
+// 8 chunks after each kind of dense work; writes the chunk times as CSV. See doc/performance.md
+// (ninth round).
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double microseconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::micro>(b - a).count();
+}
+
+#if defined(__AVX512F__)
+/** Eight independent FMA chains of `Vec` for `ms` milliseconds. */
+template <class Vec, class Fma> __attribute__((noinline)) Vec dense_fma(double ms, Vec a, Fma fma) {
+  Vec acc[8];
+  for (Vec& v : acc)
+    v = a;
+  const Clock::time_point start = Clock::now();
+  while (microseconds(start, Clock::now()) < 1000.0 * ms)
+    for (int i = 0; i < 1000; ++i)
+      for (Vec& v : acc)
+        v = fma(a, v, a);
+  for (int k = 1; k < 8; ++k)
+    acc[0] = fma(a, acc[0], acc[k]);
+  return acc[0];
+}
+#endif
+
+/** Times of `chunks` chunks of a scalar dependent chain (clock-bound). */
+__attribute__((noinline)) void scalar_probe(std::vector<double>& chunk_us, double& sink) {
+  double x = sink;
+  for (double& t : chunk_us) {
+    const Clock::time_point start = Clock::now();
+    for (int i = 0; i < 20000; ++i)
+      x = x * 1.0000001 + 1e-9;
+    t = microseconds(start, Clock::now());
+  }
+  sink = x;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+  const char* csv = "avx512_clock.csv";
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::strcmp(argv[i], "--csv") == 0)
+      csv = argv[i + 1];
+#if !defined(__AVX512F__)
+  std::printf("built without AVX-512: nothing to measure\n");
+  (void)csv;
+  return 0;
+#else
+  constexpr int chunks = 80, rounds = 40;
+  std::vector<double> after512(chunks), after256(chunks), steady(chunks), t(chunks);
+  double sink = 1.0;
+  for (int r = 0; r < rounds; ++r) {
+    const __m512d v512 =
+        dense_fma(2.0, _mm512_set1_pd(0.999999),
+                  [](__m512d a, __m512d b, __m512d c) { return _mm512_fmadd_pd(a, b, c); });
+    double lanes[8];
+    _mm512_storeu_pd(lanes, v512);
+    sink += lanes[0] * 1e-300;
+    scalar_probe(t, sink);
+    for (int i = 0; i < chunks; ++i)
+      after512[i] += t[i] / rounds;
+    const __m256d v256 =
+        dense_fma(2.0, _mm256_set1_pd(0.999999),
+                  [](__m256d a, __m256d b, __m256d c) { return _mm256_fmadd_pd(a, b, c); });
+    _mm256_storeu_pd(lanes, v256);
+    sink += lanes[0] * 1e-300;
+    scalar_probe(t, sink);
+    for (int i = 0; i < chunks; ++i)
+      after256[i] += t[i] / rounds;
+    scalar_probe(t, sink); // leaves any slower clock behind
+    scalar_probe(t, sink);
+    for (int i = 0; i < chunks; ++i)
+      steady[i] += t[i] / rounds;
+  }
+  double reference = 0.0;
+  for (double x : steady)
+    reference += x / chunks;
+  std::printf("scalar chunk in steady state: %.1f us\n", reference);
+  std::printf("time after the dense FMAs    slower than steady: after 512-bit  after 256-bit\n");
+  constexpr int bin = 8;
+  double elapsed = 0.0;
+  for (int i0 = 0; i0 < chunks; i0 += bin) {
+    double t512 = 0.0, t256 = 0.0;
+    for (int i = i0; i < i0 + bin; ++i) {
+      t512 += after512[i];
+      t256 += after256[i];
+    }
+    std::printf("%6.0f - %6.0f us                              %+5.1f %%       %+5.1f %%\n",
+                elapsed, elapsed + t512, 100.0 * (t512 / (bin * reference) - 1.0),
+                100.0 * (t256 / (bin * reference) - 1.0));
+    elapsed += t512;
+  }
+  if (std::FILE* f = std::fopen(csv, "w")) {
+    std::fprintf(f, "chunk,after_512_us,after_256_us,steady_us\n");
+    for (int i = 0; i < chunks; ++i)
+      std::fprintf(f, "%d,%.3f,%.3f,%.3f\n", i, after512[i], after256[i], steady[i]);
+    std::fclose(f);
+    std::printf("written %s\n", csv);
+  }
+  (void)sink;
+  return 0;
+#endif
+}
