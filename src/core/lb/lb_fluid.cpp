@@ -353,11 +353,29 @@ void LBFluid::rebuild_geometry() {
         }
       }
     }
-  m_bounce_back.clear();
+  std::vector<PlaceRun> links;
   for (const Link& l : m_links)
-    m_bounce_back.push_back(
-        {l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, l.wall_term});
+    links.push_back({l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, 1, l.wall_term});
+  m_bounce_back = merge_runs(std::move(links));
   build_halo_pairs();
+}
+
+std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) {
+  std::sort(pairs.begin(), pairs.end(),
+            [](const PlaceRun& a, const PlaceRun& b) { return a.first < b.first; });
+  std::vector<PlaceRun> runs;
+  for (const PlaceRun& p : pairs) {
+    if (!runs.empty()) {
+      PlaceRun& last = runs.back();
+      if (p.first == last.first + last.length && p.second == last.second + last.length &&
+          p.term == last.term) {
+        ++last.length;
+        continue;
+      }
+    }
+    runs.push_back(p);
+  }
+  return runs;
 }
 
 Vec3 LBFluid::boundary_force(int b) const {

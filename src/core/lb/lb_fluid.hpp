@@ -346,19 +346,25 @@ private:
   std::vector<BoundarySpec> m_boundaries;
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
-  /// the links as the update uses them: slot q of the solid node, slot -q of
-  /// the fluid node (offsets into m_f)
-  struct BounceBack {
-    std::size_t solid_slot, fluid_slot;
-    double wall_term;
+  /// Pairs of places in m_f that a fix-up after the update copies between
+  /// (with a term subtracted), as runs: `length` consecutive places from
+  /// `first` and from `second`. Walls and periodic faces give runs of whole
+  /// rows along x, so the fix-ups are vectorised copies instead of a list of
+  /// scattered single places (their order does not matter: no place is
+  /// written twice, none read after another pair wrote it).
+  struct PlaceRun {
+    std::size_t first, second;
+    std::size_t length;
+    double term;
   };
-  std::vector<BounceBack> m_bounce_back;
-  /// ghost-layer places (offsets into m_f, population included) and their
-  /// periodic images that the halo exchange copies, fluid ones only
-  struct HaloPair {
-    std::size_t ghost, image;
-  };
-  std::vector<HaloPair> m_halo;
+  /** Single pairs (length 1) merged into runs; sorts them by `first`. */
+  static std::vector<PlaceRun> merge_runs(std::vector<PlaceRun> pairs);
+  /// the links as the update uses them: first = slot q of the solid node,
+  /// second = slot -q of the fluid node, term = the wall term
+  std::vector<PlaceRun> m_bounce_back;
+  /// first = ghost-layer place (population included), second = its
+  /// periodic image, for the halo exchange; fluid ones only
+  std::vector<PlaceRun> m_halo;
   std::size_t m_n_fluid = 0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
   std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};

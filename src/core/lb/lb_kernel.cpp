@@ -326,7 +326,7 @@ void LBFluid::build_halo_pairs() {
   // Only pairs where n and g are fluid are kept: a solid n pushes nothing
   // and reads nothing, and a solid g is served by the bounce-back links. So
   // channel walls cost no halo traffic at all.
-  m_halo.clear();
+  std::vector<PlaceRun> pairs;
   for (int oz = -1; oz <= 1; ++oz)
     for (int oy = -1; oy <= 1; ++oy)
       for (int ox = -1; ox <= 1; ++ox) {
@@ -368,19 +368,21 @@ void LBFluid::build_halo_pairs() {
                 const std::size_t g = index(x, y, z);
                 if (m_flag[g] != 0 || m_flag[g - m_offset[q]] != 0)
                   continue;
-                m_halo.push_back({slot + g, slot + g + delta});
+                pairs.push_back({slot + g, slot + g + delta, 1, 0.0});
               }
         }
       }
+  m_halo = merge_runs(std::move(pairs));
 }
 
 void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
-  if (fill_ghosts)
-    for (const HaloPair& h : m_halo)
-      f[h.ghost] = f[h.image];
-  else
-    for (const HaloPair& h : m_halo)
-      f[h.image] = f[h.ghost];
+  for (const PlaceRun& r : m_halo) {
+    // ghosts and images are disjoint places
+    double* __restrict to = f + (fill_ghosts ? r.first : r.second);
+    const double* __restrict from = f + (fill_ghosts ? r.second : r.first);
+    for (std::size_t i = 0; i < r.length; ++i)
+      to[i] = from[i];
+  }
 }
 
 void LBFluid::apply_bounce_back(double* f) const {
@@ -390,12 +392,13 @@ void LBFluid::apply_bounce_back(double* f) const {
   // solid node's slot q and goes to the fluid node's slot -q; after an even
   // update it sits in the fluid node's slot -q and goes to the solid node's
   // slot q, where the next (odd) update reads the fluid node's f_{-q}.
-  if (m_swapped)
-    for (const BounceBack& b : m_bounce_back)
-      f[b.solid_slot] = f[b.fluid_slot] - b.wall_term;
-  else
-    for (const BounceBack& b : m_bounce_back)
-      f[b.fluid_slot] = f[b.solid_slot] - b.wall_term;
+  for (const PlaceRun& r : m_bounce_back) {
+    // slots q and -q of any nodes are disjoint places
+    double* __restrict to = f + (m_swapped ? r.first : r.second);
+    const double* __restrict from = f + (m_swapped ? r.second : r.first);
+    for (std::size_t i = 0; i < r.length; ++i)
+      to[i] = from[i] - r.term;
+  }
 }
 
 void LBFluid::report_instability(const BadNode& bad) {
