@@ -61,6 +61,28 @@ class MpiLauncher(unittest.TestCase):
             with open(os.path.join(folder, "c9.vtk")) as f:
                 self.assertEqual(f.read().count("POINT_DATA"), 1)
 
+    def test_bad_polydata_refused_on_every_rank(self):
+        """Polygons that are not index lists (and a file name under a file):
+        every rank raises. Before, the writing rank raised while formatting,
+        before the shared outcome, and the others waited for it forever."""
+        import os
+        import tempfile
+
+        from oif import vtk
+        comm = MPI.COMM_WORLD
+        folder = comm.bcast(tempfile.mkdtemp() if comm.Get_rank() == 0 else None, root=0)
+        points = np.zeros((3, 3))
+        with self.assertRaisesRegex(TypeError, "polygons must be lists of point indices"):
+            vtk.write_polydata(os.path.join(folder, "bad.vtk"), points, polygons=[[0, "a", 2]])
+        if comm.Get_rank() == 0:
+            open(os.path.join(folder, "afile"), "w").close()
+        comm.Barrier()
+        with self.assertRaisesRegex(ValueError, "is a file, not a folder"):
+            vtk.write_polydata(os.path.join(folder, "afile", "x.vtk"), points, polygons=[[0, 1, 2]])
+        vtk.write_polydata(os.path.join(folder, "good.vtk"), points, polygons=[[0, 1, 2]])
+        comm.Barrier()
+        self.assertTrue(os.path.exists(os.path.join(folder, "good.vtk")))
+
     def test_world_size(self):
         self.assertGreaterEqual(MPI.COMM_WORLD.Get_size(), 1)
 

@@ -137,15 +137,14 @@ def _shape_value(owner, shape, name, kind):
 
 
 def _checked(owner, name, value, kind):
-    if kind == "pos":
-        if (not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_))
-                or not np.isfinite(value) or value <= 0):
-            raise ValueError(f"{owner}: '{name}' must be a finite number > 0, got {value!r}")
-        return float(value)
-    if kind == "nonneg":
-        if (not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_))
-                or not np.isfinite(value) or value < 0):
-            raise ValueError(f"{owner}: '{name}' must be a finite number >= 0, got {value!r}")
+    """TypeError for what is not numbers, ValueError for bad values (as the
+    lbmd parameters)."""
+    if kind in ("pos", "nonneg"):
+        if not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_)):
+            raise TypeError(f"{owner}: '{name}' must be a number, got {value!r}")
+        if not np.isfinite(value) or (value <= 0 if kind == "pos" else value < 0):
+            raise ValueError(f"{owner}: '{name}' must be a finite number {'> 0' if kind == 'pos' else '>= 0'}, "
+                             f"got {value!r}")
         return float(value)
     arr = _vector3(f"{owner}: '{name}'", value)
     if kind == "dir" and not np.any(arr != 0):

@@ -142,16 +142,22 @@ def write_polydata(path, points, polygons=None, lines=None, point_data=None, tit
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     arrays = _point_arrays(point_data, n)
+    # every input checked on every rank: the writer raising alone before the
+    # shared write would leave the other ranks waiting for its outcome
+    cell_lists = []
+    for keyword, cells in (("POLYGONS", polygons), ("LINES", lines)):
+        if cells is not None and len(cells) > 0:
+            try:
+                cell_lists.append((keyword, [np.asarray(c, dtype=np.int64).ravel() for c in cells]))
+            except (TypeError, ValueError):
+                raise TypeError(f"VTK output: {keyword.lower()} must be lists of point indices") from None
     if not _is_writer():  # the other ranks only share the writer's outcome
         write_text(path, "", "VTK output")
         return
     out = [f"# vtk DataFile Version 3.0\n{title}\nASCII\nDATASET POLYDATA\n", f"POINTS {n} double\n"]
     if n:
         out.append("\n".join(" ".join(repr(float(x)) for x in p) for p in points) + "\n")
-    for keyword, cells in (("POLYGONS", polygons), ("LINES", lines)):
-        if cells is None or len(cells) == 0:
-            continue
-        cells = [np.asarray(c, dtype=np.int64).ravel() for c in cells]
+    for keyword, cells in cell_lists:
         size = sum(len(c) + 1 for c in cells)
         out.append(f"{keyword} {len(cells)} {size}\n")
         out.append("\n".join(f"{len(c)} " + " ".join(map(str, c)) for c in cells) + "\n")

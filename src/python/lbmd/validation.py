@@ -1,9 +1,10 @@
 """Parameter declaration and validation, in one place for the whole package.
 
 A class declares its parameters as a list of :class:`Param`; :func:`parse`
-checks a call's keyword arguments against it: unknown or missing keywords are
-``TypeError``, values of the wrong kind or out of range are ``ValueError``,
-each message naming the class, the parameter and what was expected.
+checks a call's keyword arguments against it: unknown or missing keywords and
+values of the wrong type (a string for a number) are ``TypeError``, values out
+of range or of the wrong size are ``ValueError``, each message naming the
+class, the parameter and what was expected.
 """
 import math
 import numbers
@@ -106,7 +107,9 @@ def vector3(where, value, positive=False):
         arr = raw.astype(float)
     except (TypeError, ValueError):
         raise TypeError(f"{where} must be 3 numbers, got {value!r}") from None
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+    if arr.shape != (3,):
+        raise ValueError(f"{where} must be 3 numbers, got {value!r}")
+    if not np.all(np.isfinite(arr)):
         raise ValueError(f"{where} must be 3 finite numbers, got {value!r}")
     if positive and not np.all(arr > 0):
         raise ValueError(f"{where} must be positive in every component, got {value!r}")
