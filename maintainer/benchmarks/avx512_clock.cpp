@@ -6,22 +6,27 @@
 // passes that follow it in a time step run in that time. This program
 // measures the effect: a scalar dependent chain (clock-bound, no memory) is
 // timed in chunks of a few tens of microseconds right after 2 ms of 512-bit
-// FMAs, right after 2 ms of 256-bit FMAs, and in steady state.
+// FMAs, right after 2 ms of 256-bit FMAs, and in steady state; the median
+// of 40 rounds per chunk.
 //
 //     build/avx512_clock [--csv avx512_clock.csv]
 //
 // Prints how much slower the chunks ran than in steady state, in spells of
 // 8 chunks after each kind of dense work; writes the chunk times as CSV. See doc/performance.md
 // (ninth round).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <vector>
 
+#include <sched.h>
+
 #if defined(__AVX512F__)
 #include <immintrin.h>
 #endif
 
+#if defined(__AVX512F__)
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -30,22 +35,24 @@ double microseconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::micro>(b - a).count();
 }
 
-#if defined(__AVX512F__)
-/** Eight independent FMA chains of `Vec` for `ms` milliseconds. */
+/** Eight independent FMA chains of `Vec` for `ms` milliseconds, in
+ *  registers (about two FMAs per cycle). */
 template <class Vec, class Fma> __attribute__((noinline)) Vec dense_fma(double ms, Vec a, Fma fma) {
-  Vec acc[8];
-  for (Vec& v : acc)
-    v = a;
+  Vec c0 = a, c1 = a, c2 = a, c3 = a, c4 = a, c5 = a, c6 = a, c7 = a;
   const Clock::time_point start = Clock::now();
   while (microseconds(start, Clock::now()) < 1000.0 * ms)
-    for (int i = 0; i < 1000; ++i)
-      for (Vec& v : acc)
-        v = fma(a, v, a);
-  for (int k = 1; k < 8; ++k)
-    acc[0] = fma(a, acc[0], acc[k]);
-  return acc[0];
+    for (int i = 0; i < 1000; ++i) {
+      c0 = fma(a, c0, a);
+      c1 = fma(a, c1, a);
+      c2 = fma(a, c2, a);
+      c3 = fma(a, c3, a);
+      c4 = fma(a, c4, a);
+      c5 = fma(a, c5, a);
+      c6 = fma(a, c6, a);
+      c7 = fma(a, c7, a);
+    }
+  return fma(fma(fma(c0, c1, c2), c3, fma(c4, c5, c6)), a, c7);
 }
-#endif
 
 /** Times of `chunks` chunks of a scalar dependent chain (clock-bound). */
 __attribute__((noinline)) void scalar_probe(std::vector<double>& chunk_us, double& sink) {
@@ -59,7 +66,22 @@ __attribute__((noinline)) void scalar_probe(std::vector<double>& chunk_us, doubl
   sink = x;
 }
 
+/** Median of each chunk over the rounds: a round the process lost its core
+ *  in does not swamp the figure. */
+std::vector<double> chunk_medians(std::vector<std::vector<double>> rounds) {
+  std::vector<double> medians;
+  for (std::size_t i = 0; i < rounds[0].size(); ++i) {
+    std::vector<double> values;
+    for (const auto& r : rounds)
+      values.push_back(r[i]);
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    medians.push_back(values[values.size() / 2]);
+  }
+  return medians;
+}
+
 } // namespace
+#endif
 
 int main(int argc, char** argv) {
   const char* csv = "avx512_clock.csv";
@@ -71,32 +93,35 @@ int main(int argc, char** argv) {
   (void)csv;
   return 0;
 #else
+  // on one core throughout: a move to another core between the FMAs and
+  // the probe would hide the effect
+  cpu_set_t one_core;
+  CPU_ZERO(&one_core);
+  CPU_SET(sched_getcpu(), &one_core);
+  sched_setaffinity(0, sizeof one_core, &one_core);
   constexpr int chunks = 80, rounds = 40;
-  std::vector<double> after512(chunks), after256(chunks), steady(chunks), t(chunks);
-  double sink = 1.0;
+  std::vector<std::vector<double>> runs512, runs256, runs_steady;
+  std::vector<double> t(chunks);
+  double sink = 1.0, lanes[8];
   for (int r = 0; r < rounds; ++r) {
-    const __m512d v512 =
-        dense_fma(2.0, _mm512_set1_pd(0.999999),
-                  [](__m512d a, __m512d b, __m512d c) { return _mm512_fmadd_pd(a, b, c); });
-    double lanes[8];
-    _mm512_storeu_pd(lanes, v512);
+    _mm512_storeu_pd(
+        lanes, dense_fma(2.0, _mm512_set1_pd(0.999999),
+                         [](__m512d a, __m512d b, __m512d c) { return _mm512_fmadd_pd(a, b, c); }));
     sink += lanes[0] * 1e-300;
     scalar_probe(t, sink);
-    for (int i = 0; i < chunks; ++i)
-      after512[i] += t[i] / rounds;
-    const __m256d v256 =
-        dense_fma(2.0, _mm256_set1_pd(0.999999),
-                  [](__m256d a, __m256d b, __m256d c) { return _mm256_fmadd_pd(a, b, c); });
-    _mm256_storeu_pd(lanes, v256);
+    runs512.push_back(t);
+    _mm256_storeu_pd(
+        lanes, dense_fma(2.0, _mm256_set1_pd(0.999999),
+                         [](__m256d a, __m256d b, __m256d c) { return _mm256_fmadd_pd(a, b, c); }));
     sink += lanes[0] * 1e-300;
     scalar_probe(t, sink);
-    for (int i = 0; i < chunks; ++i)
-      after256[i] += t[i] / rounds;
+    runs256.push_back(t);
     scalar_probe(t, sink); // leaves any slower clock behind
     scalar_probe(t, sink);
-    for (int i = 0; i < chunks; ++i)
-      steady[i] += t[i] / rounds;
+    runs_steady.push_back(t);
   }
+  const std::vector<double> after512 = chunk_medians(runs512), after256 = chunk_medians(runs256),
+                            steady = chunk_medians(runs_steady);
   double reference = 0.0;
   for (double x : steady)
     reference += x / chunks;

@@ -12,8 +12,10 @@ hours on 6 cores in the paper) would take.
 
 Each figure is the wall time of the time steps alone, from the timing report
 the sample prints (integrator.timings(): set-up, seeding and output are not
-in it), for one run of --steps steps; the least of --repeats runs counts (on
-a shared machine the quietest). Also printed: the lattice update's share.
+in it; the force computation a run starts with neither), for one run of
+--steps steps; the least of --repeats runs counts (on a shared machine the
+quietest). On one thread of an otherwise idle core, wall time is CPU time,
+the paper's measure. Also printed: the lattice update's share.
 (Until the ninth round the figure was the CPU time of a long run less that
 of a short one, which the set-up's variation made noisy by several seconds.)
 """
@@ -51,6 +53,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=2, help="runs per configuration (the least counts)")
     ap.add_argument("--csv", default="bifurcation_cost.csv")
     args = ap.parse_args()
+    if args.steps < 1 or args.repeats < 1:
+        ap.error("--steps and --repeats must be at least 1")
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("note: set OMP_NUM_THREADS=1 for the one-core figure")
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -64,8 +68,9 @@ def main():
             s1000 = 1000.0 * per_step
             hours = per_step * STEPS_138_MS / 3600.0
             paper = PAPER_ONE_CORE.get(n)
-            print(f"{n:3d} RBCs + rare cell: {s1000:7.2f} s / 1000 steps (lattice update {100 * lattice / per_step:.0f} %)"
-                  + (f"; paper, one core: {paper:.2f} s ({paper / s1000:.1f}x)" if paper else "")
+            print(f"{n:3d} RBCs + rare cell: {s1000:7.2f} wall s / 1000 steps (lattice update "
+                  f"{100 * lattice / per_step:.0f} %)"
+                  + (f"; paper, one core: {paper:.2f} CPU s ({paper / s1000:.1f}x)" if paper else "")
                   + f"; 138 ms of flow: {hours:.1f} h on one core (paper: 16 h on 6 cores = 96 core-hours)")
             rows.append({"rbcs": n, "s_per_1000_steps": s1000, "lattice_update_share": lattice / per_step,
                          "paper_one_core_s": paper or "", "hours_for_138_ms_one_core": hours})

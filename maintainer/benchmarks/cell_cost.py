@@ -180,15 +180,15 @@ def main():
     # for having cells at all (see doc/performance.md: after the lattice
     # sweep the core runs the first milliseconds of cell work slower)
     counts = [n for n in args.cells if n > 0]
-    if base is not None and len(counts) >= 2:
-        extra_total = [results[args.cells.index(n)][0] - base for n in counts]
+    if base is not None and len(set(counts)) >= 2:
+        extra_total = [s1000 - base for n, (s1000, _, _) in zip(args.cells, results) if n > 0]
         marginal, fixed = np.polyfit(counts, extra_total, 1)
         print(f"fit over {'/'.join(map(str, counts))} cells: {marginal:.4f} {unit} / 1000 steps per cell "
               f"(what one more cell adds) + {fixed:.4f} {unit} / 1000 steps for having cells at all")
         rows.append({"cells": "fit_marginal_per_cell", "fluid": not args.no_fluid, "measure": unit,
                      "s_per_1000_steps": "", "extra_s_per_cell_per_1000_steps": marginal,
                      "wall_s_per_1000_steps": ""})
-        rows.append({"cells": "fit_fixed", "fluid": not args.no_fluid, "measure": unit,
+        rows.append({"cells": "fit_fixed", "fluid": not args.no_fluid, "measure": unit + " (extra, all cells)",
                      "s_per_1000_steps": fixed, "extra_s_per_cell_per_1000_steps": "",
                      "wall_s_per_1000_steps": ""})
     rows.append({"cells": "create_one_cell_s", "fluid": "", "measure": "wall s", "s_per_1000_steps": t_create,
