@@ -266,22 +266,18 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
   std::vector<BoundarySpec> old_boundaries = std::move(m_boundaries);
   m_boundaries = boundaries;
   std::fill(m_flag.begin(), m_flag.end(), 0);
+  bool any_fluid = false;
   for (int x = 1; x <= m_n[0]; ++x)
     for (int y = 1; y <= m_n[1]; ++y)
       for (int z = 1; z <= m_n[2]; ++z) {
         const Vec3 pos = (Vec3(x, y, z) - Vec3::Constant(0.5)) * m_p.agrid;
-        for (std::size_t b = 0; b < boundaries.size(); ++b)
-          if (boundaries[b].shape->is_inside(pos)) {
-            m_flag[index(x, y, z)] = static_cast<std::uint16_t>(b + 1);
-            break;
-          }
+        std::uint16_t& flag = m_flag[index(x, y, z)];
+        for (std::size_t b = 0; b < boundaries.size() && flag == 0; ++b)
+          if (boundaries[b].shape->is_inside(pos))
+            flag = static_cast<std::uint16_t>(b + 1);
+        any_fluid |= flag == 0;
       }
   // no fluid left: refused (the flags back as they were, nothing else changed)
-  bool any_fluid = false;
-  for (int x = 1; x <= m_n[0] && !any_fluid; ++x)
-    for (int y = 1; y <= m_n[1] && !any_fluid; ++y)
-      for (int z = 1; z <= m_n[2] && !any_fluid; ++z)
-        any_fluid = m_flag[index(x, y, z)] == 0;
   if (!any_fluid && !boundaries.empty()) {
     m_flag = old_flag;
     m_boundaries = std::move(old_boundaries);
