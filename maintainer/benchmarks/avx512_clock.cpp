@@ -23,10 +23,6 @@
 #include <sched.h>
 
 #if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
-
-#if defined(__AVX512F__)
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -35,23 +31,35 @@ double microseconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::micro>(b - a).count();
 }
 
+/** 8 and 4 doubles (GCC vector extension: a * b + c compiles to one FMA of
+ *  that width). */
+using Doubles8 = double __attribute__((vector_size(64)));
+using Doubles4 = double __attribute__((vector_size(32)));
+
 /** Eight independent FMA chains of `Vec` for `ms` milliseconds, in
- *  registers (about two FMAs per cycle). */
-template <class Vec, class Fma> __attribute__((noinline)) Vec dense_fma(double ms, Vec a, Fma fma) {
-  Vec c0 = a, c1 = a, c2 = a, c3 = a, c4 = a, c5 = a, c6 = a, c7 = a;
+ *  registers (about two FMAs per cycle); returns a lane of the result, for
+ *  the caller to keep. */
+template <class Vec> __attribute__((noinline)) double dense_fma(double ms) {
+  const Vec a = Vec{} + 0.999999;
+  // different starts: eight equal chains would be computed once
+  Vec c0 = a, c1 = a + 1e-3, c2 = a + 2e-3, c3 = a + 3e-3, c4 = a + 4e-3, c5 = a + 5e-3,
+      c6 = a + 6e-3, c7 = a + 7e-3;
   const Clock::time_point start = Clock::now();
   while (microseconds(start, Clock::now()) < 1000.0 * ms)
     for (int i = 0; i < 1000; ++i) {
-      c0 = fma(a, c0, a);
-      c1 = fma(a, c1, a);
-      c2 = fma(a, c2, a);
-      c3 = fma(a, c3, a);
-      c4 = fma(a, c4, a);
-      c5 = fma(a, c5, a);
-      c6 = fma(a, c6, a);
-      c7 = fma(a, c7, a);
+      c0 = a * c0 + a;
+      c1 = a * c1 + a;
+      c2 = a * c2 + a;
+      c3 = a * c3 + a;
+      c4 = a * c4 + a;
+      c5 = a * c5 + a;
+      c6 = a * c6 + a;
+      c7 = a * c7 + a;
     }
-  return fma(fma(fma(c0, c1, c2), c3, fma(c4, c5, c6)), a, c7);
+  const Vec sum = (c0 + c1) + (c2 + c3) + (c4 + c5) + (c6 + c7);
+  double first;
+  std::memcpy(&first, &sum, sizeof first);
+  return first;
 }
 
 /** Times of `chunks` chunks of a scalar dependent chain (clock-bound). */
@@ -102,20 +110,16 @@ int main(int argc, char** argv) {
   constexpr int chunks = 80, rounds = 40;
   std::vector<std::vector<double>> runs512, runs256, runs_steady;
   std::vector<double> t(chunks);
-  double sink = 1.0, lanes[8];
+  double sink = 1.0;
+  // the probe's chunks right after `dense` ran, appended to `runs`
+  auto probe_after = [&](double (*dense)(double), std::vector<std::vector<double>>& runs) {
+    sink += dense(2.0) * 1e-300;
+    scalar_probe(t, sink);
+    runs.push_back(t);
+  };
   for (int r = 0; r < rounds; ++r) {
-    _mm512_storeu_pd(
-        lanes, dense_fma(2.0, _mm512_set1_pd(0.999999),
-                         [](__m512d a, __m512d b, __m512d c) { return _mm512_fmadd_pd(a, b, c); }));
-    sink += lanes[0] * 1e-300;
-    scalar_probe(t, sink);
-    runs512.push_back(t);
-    _mm256_storeu_pd(
-        lanes, dense_fma(2.0, _mm256_set1_pd(0.999999),
-                         [](__m256d a, __m256d b, __m256d c) { return _mm256_fmadd_pd(a, b, c); }));
-    sink += lanes[0] * 1e-300;
-    scalar_probe(t, sink);
-    runs256.push_back(t);
+    probe_after(dense_fma<Doubles8>, runs512);
+    probe_after(dense_fma<Doubles4>, runs256);
     scalar_probe(t, sink); // leaves any slower clock behind
     scalar_probe(t, sink);
     runs_steady.push_back(t);
