@@ -359,6 +359,9 @@ private:
   };
   /** Single pairs (length 1) merged into runs; sorts them by `first`. */
   static std::vector<PlaceRun> merge_runs(std::vector<PlaceRun> pairs);
+  /** f[to] = f[from] - term for every pair of the runs, into `first`
+   *  (into_first) or into `second`. */
+  static void apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first);
   /// the links as the update uses them: first = slot q of the solid node,
   /// second = slot -q of the fluid node, term = the wall term
   std::vector<PlaceRun> m_bounce_back;

@@ -375,14 +375,19 @@ void LBFluid::build_halo_pairs() {
   m_halo = merge_runs(std::move(pairs));
 }
 
-void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
-  for (const PlaceRun& r : m_halo) {
-    // ghosts and images are disjoint places
-    double* __restrict to = f + (fill_ghosts ? r.first : r.second);
-    const double* __restrict from = f + (fill_ghosts ? r.second : r.first);
+void LBFluid::apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first) {
+  for (const PlaceRun& r : runs) {
+    // the two sides of a run are disjoint places (ghosts and domain nodes;
+    // slots q and -q)
+    double* __restrict to = f + (into_first ? r.first : r.second);
+    const double* __restrict from = f + (into_first ? r.second : r.first);
     for (std::size_t i = 0; i < r.length; ++i)
-      to[i] = from[i];
+      to[i] = from[i] - r.term; // term 0 in the halo: x - 0.0 is x
   }
+}
+
+void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+  apply_runs(f, m_halo, fill_ghosts);
 }
 
 void LBFluid::apply_bounce_back(double* f) const {
@@ -392,13 +397,7 @@ void LBFluid::apply_bounce_back(double* f) const {
   // solid node's slot q and goes to the fluid node's slot -q; after an even
   // update it sits in the fluid node's slot -q and goes to the solid node's
   // slot q, where the next (odd) update reads the fluid node's f_{-q}.
-  for (const PlaceRun& r : m_bounce_back) {
-    // slots q and -q of any nodes are disjoint places
-    double* __restrict to = f + (m_swapped ? r.first : r.second);
-    const double* __restrict from = f + (m_swapped ? r.second : r.first);
-    for (std::size_t i = 0; i < r.length; ++i)
-      to[i] = from[i] - r.term;
-  }
+  apply_runs(f, m_bounce_back, m_swapped);
 }
 
 void LBFluid::report_instability(const BadNode& bad) {
