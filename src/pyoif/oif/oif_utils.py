@@ -7,12 +7,11 @@ The mesh-wide, vectorised versions live in ``oif.geometry``; these take
 single points (lists or arrays of 3 numbers) as PyOIF's did.
 """
 import math
-import numbers
 import os
 
 import numpy as np
 
-from lbmd.validation import vector3 as _vector3
+from lbmd.validation import real_number as _real_number, vector3 as _vector3
 
 from . import vtk as _vtk
 
@@ -140,12 +139,10 @@ def _checked(owner, name, value, kind):
     """TypeError for what is not numbers, ValueError for bad values (as the
     lbmd parameters)."""
     if kind in ("pos", "nonneg"):
-        if not isinstance(value, (numbers.Real, np.floating, np.integer)) or isinstance(value, (bool, np.bool_)):
-            raise TypeError(f"{owner}: '{name}' must be a number, got {value!r}")
-        if not np.isfinite(value) or (value <= 0 if kind == "pos" else value < 0):
-            raise ValueError(f"{owner}: '{name}' must be a finite number {'> 0' if kind == 'pos' else '>= 0'}, "
-                             f"got {value!r}")
-        return float(value)
+        x = _real_number(f"{owner}: '{name}'", value)
+        if x <= 0 if kind == "pos" else x < 0:
+            raise ValueError(f"{owner}: '{name}' must be {'> 0' if kind == 'pos' else '>= 0'}, got {value!r}")
+        return x
     arr = _vector3(f"{owner}: '{name}'", value)
     if kind == "dir" and not np.any(arr != 0):
         raise ValueError(f"{owner}: '{name}' must not be the zero vector (it is a direction)")

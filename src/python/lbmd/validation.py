@@ -37,11 +37,7 @@ class Param:
         if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
             value = value.item()  # np.array(0.01) as 0.01
         if k == "float":
-            if isinstance(value, bool) or not isinstance(value, numbers.Real):
-                raise TypeError(f"{where} must be a number, got {value!r}")
-            value = float(value)
-            if not math.isfinite(value):
-                raise ValueError(f"{where} must be finite, got {value!r}")
+            value = real_number(where, value)
         elif k in ("int", "seed"):
             if isinstance(value, bool) or not isinstance(value, numbers.Integral):
                 raise TypeError(f"{where} must be an integer, got {value!r}")
@@ -92,6 +88,18 @@ def parse(owner, params, kwargs):
         else:
             out[p.name] = p.default
     return out
+
+
+def real_number(where, value):
+    """value as a finite float; `where` names what is checked. TypeError for
+    what is not a real number (booleans included), ValueError for NaN and
+    infinities."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{where} must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{where} must be finite, got {value!r}")
+    return value
 
 
 def vector3(where, value, positive=False):
