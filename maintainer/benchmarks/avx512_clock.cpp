@@ -12,8 +12,8 @@
 //     build/avx512_clock [--csv avx512_clock.csv]
 //
 // Prints how much slower the chunks ran than in steady state, in spells of
-// 8 chunks after each kind of dense work; writes the chunk times as CSV. See doc/performance.md
-// (ninth round).
+// 8 chunks after each kind of dense work; writes the chunk times as CSV.
+// See doc/performance.md (ninth round).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
