@@ -28,7 +28,7 @@ ALL_LINEAR = dict(ALL, ks=0.0, kslin=0.02)  # the oif package takes ks or kslin
 TOL = 1e-12
 
 
-def make(moduli, seed=5, noise=0.04):
+def make(moduli, seed=5, noise=0.04, origins=([0.4, BOX - 0.3, 0.2], [12.0, 11.0, 13.0])):
     rng = np.random.default_rng(seed)
     system = lbmd.System(box_l=[BOX, BOX, BOX])
     system.time_step = 0.01
@@ -40,12 +40,12 @@ def make(moduli, seed=5, noise=0.04):
                           normal=True, **moduli)
     cells = [oif.OifCell(cell_type=rbc, particle_type=0, origin=origin,
                          rotate=rng.uniform(0, 2 * np.pi, 3))
-             for origin in ([0.4, BOX - 0.3, 0.2], [12.0, 11.0, 13.0])]
-    for cell in cells:
+             for origin in origins]
+    for cell, cell_noise in zip(cells, np.broadcast_to(noise, len(cells))):
         x = cell.particles.pos
         centre = x.mean(axis=0)
         stretch = np.diag(rng.uniform(0.85, 1.15, 3))
-        x = centre + (x - centre) @ stretch + rng.normal(scale=noise, size=x.shape)
+        x = centre + (x - centre) @ stretch + rng.normal(scale=cell_noise, size=x.shape)
         cell.particles.pos = x
         cell.particles.v = rng.normal(scale=0.1, size=x.shape)
     return system, cells
@@ -89,6 +89,28 @@ class FastPathMatchesGeneric(unittest.TestCase):
             errors[name] = self.compare(system, name)
         print("fast/generic relative force difference:",
               ", ".join(f"{k} {v:.1e}" for k, v in errors.items()))
+
+    def test_many_cells_of_one_type(self):
+        """Six cells of one type: the fused pass evaluates four of them
+        together, one per vector lane (FusedMembranePlan::evaluate_batch),
+        and the other two one at a time. The cells are deformed by different
+        amounts, so that some lanes have dihedral deviations beyond the
+        polynomial arctangent's 14 degrees and others not; one cell straddles
+        the box corner; then a batched cell's mol_id changes (regroup)."""
+        origins = ([0.4, BOX - 0.3, 0.2], [12.0, 11.0, 13.0], [6.0, 18.0, 6.0],
+                   [18.0, 6.0, 18.0], [6.0, 6.0, 18.0], [18.0, 18.0, 6.0])
+        noise = [0.01, 0.04, 0.15, 0.02, 0.08, 0.03]
+        cases = dict(all=ALL, all_linear=ALL_LINEAR,
+                     kb_kv={"kb": ALL["kb"], "kv": ALL["kv"]},
+                     ks_kal_kag={k: ALL[k] for k in ("ks", "kal", "kag")},
+                     kvisc_kv={"kvisc": ALL["kvisc"], "kv": ALL["kv"]})
+        for name, moduli in cases.items():
+            system, cells = make(moduli, origins=origins, noise=noise)
+            self.compare(system, f"six cells, {name}")
+        cells[2].particles.mol_id = 17
+        self.compare(system, "six cells, a mol_id changed")
+        system.integrator.run(20)
+        self.compare(system, "six cells, 20 steps")
 
     def test_plan_follows_changes(self):
         # a milder deformation than make's default: 200 steps of it fold a

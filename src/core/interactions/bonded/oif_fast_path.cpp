@@ -4,10 +4,15 @@
 
 #include <Eigen/Geometry>
 
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -52,14 +57,37 @@ centroid_area_force(const double (&p0)[3], const double (&p1)[3], const double (
   }
 }
 
+/** Masks of lane comparisons (-1 where true) and their tests. */
+using LaneMask = decltype(Lanes{} > Lanes{});
+inline bool any_lane(LaneMask m) {
+  return (m[0] | m[1] | m[2] | m[3]) != 0;
+}
+inline Lanes splat(double x) {
+  return Lanes{x, x, x, x};
+}
+/** Lane-wise square root, correctly rounded as std::sqrt. */
+inline Lanes sqrt_lanes(Lanes a) {
+#if defined(__AVX__)
+  return reinterpret_cast<Lanes>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(a)));
+#else
+  for (int j = 0; j < 4; ++j)
+    a[j] = std::sqrt(a[j]);
+  return a;
+#endif
+}
+
 /** atan(t) for |t| <= 1/4 (dihedral deviations below 14 degrees, most of a
  *  membrane's): t P(t^2), P the Chebyshev economisation on [0, 1/16] of the
  *  Taylor series of atan(sqrt s)/sqrt s, derived in exact rational arithmetic
  *  (dropped terms < 5e-18; largest relative error against libm's atan on 2e5
- *  random points 2.2e-16). Branch-free, so a block of bonds vectorises. */
-inline double atan_small(double t) {
-  const double s = t * t;
-  double pz = 0.04599761088928747;
+ *  random points 2.2e-16). Branch-free, so a block of bonds vectorises; T: double or Lanes. */
+template <class T> inline T atan_small(T t) {
+  const T s = t * t;
+  T pz;
+  if constexpr (std::is_same_v<T, double>)
+    pz = 0.04599761088928747;
+  else
+    pz = splat(0.04599761088928747);
   pz = pz * s - 0.06523656687585018;
   pz = pz * s + 0.07683492919828101;
   pz = pz * s - 0.09090589248444612;
@@ -139,13 +167,14 @@ struct EdgeBlock {
 /** A cell's area (sum of its triangles' areas) and volume (eqs. 6, 7: sum of
  *  a.N / 6) from per-triangle values: four partial sums over k mod 4, so
  *  that there is no loop-carried chain of additions, the last n mod 4 terms
- *  into the first. Fed in order, whole or block by block (blocks starting
- *  at multiples of 4), the sums are the same bit for bit. */
-class AreaVolumeSums {
+ *  into the first. Fed in order, whole, block by block (blocks starting at
+ *  multiples of 4) or one triangle at a time, the sums are the same bit for
+ *  bit. T: double, or Lanes for four cells at once (one per lane). */
+template <class T = double> class AreaVolumeSums {
 public:
   explicit AreaVolumeSums(int n) : m_n4(n - n % 4) {}
   /** Triangles first .. first + nb - 1: area[k], vol[k] for first + k. */
-  void add(const double* area, const double* vol, int first, int nb) {
+  void add(const T* area, const T* vol, int first, int nb) {
     const int full = std::max(0, std::min(nb, m_n4 - first));
     for (int k = 0; k < full; k += 4)
       for (int j = 0; j < 4; ++j) {
@@ -157,12 +186,18 @@ public:
       m_vol[0] += vol[k];
     }
   }
-  double area() const { return (m_area[0] + m_area[1]) + (m_area[2] + m_area[3]); }
-  double volume() const { return ((m_vol[0] + m_vol[1]) + (m_vol[2] + m_vol[3])) / 6.0; }
+  /** Triangle q alone (q = 0, 1, ... in order). */
+  void add_one(int q, const T& area, const T& vol) {
+    const int j = q < m_n4 ? (q & 3) : 0;
+    m_area[j] += area;
+    m_vol[j] += vol;
+  }
+  T area() const { return (m_area[0] + m_area[1]) + (m_area[2] + m_area[3]); }
+  T volume() const { return ((m_vol[0] + m_vol[1]) + (m_vol[2] + m_vol[3])) / 6.0; }
 
 private:
   int m_n4;
-  double m_area[4] = {0.0, 0.0, 0.0, 0.0}, m_vol[4] = {0.0, 0.0, 0.0, 0.0};
+  T m_area[4] = {}, m_vol[4] = {};
 };
 
 /** The edge pass of edge_block_forces for one combination of terms known
@@ -318,6 +353,168 @@ bool edge_block_forces(EdgeBlock& blk, int nb, const double* r0, const double* i
   if (neo)
     return visc ? by_wings(yes{}, yes{}) : by_wings(yes{}, no{});
   return visc ? by_wings(no{}, yes{}) : by_wings(no{}, no{});
+}
+
+/** A cell's factors of the global forces, from its area and volume: the
+ *  global area force (eq. 6) is kag (S_cell - S_cell0) / S_cell0 times the
+ *  triangles' g, the volume force (eq. 7) -kv (|V| - V0) / V0 s N / 6 on each
+ *  vertex (volume = that factor times the node's sum of N), s the volume's
+ *  sign (outward normals for either orientation). */
+struct CellFactors {
+  double area, volume, sign;
+  CellFactors(double cell_area, double cell_volume, const OifGlobalForces& ia) {
+    area = ia.ka_g != 0.0 ? ia.ka_g * (cell_area - ia.A0_g) / ia.A0_g : 0.0;
+    sign = cell_volume < 0.0 ? -1.0 : 1.0;
+    volume = ia.kv != 0.0 ? -ia.kv * ((sign * cell_volume - ia.V0) / ia.V0) * sign / 6.0 : 0.0;
+  }
+};
+
+/** The edge pass of edge_block_terms for four cells at once, one per lane
+ *  (FusedMembranePlan::evaluate_batch): per edge the same formulas in the
+ *  same order on vectors of the four cells' values; the node components are
+ *  loaded and the forces added as whole vectors. In blocks of kBatchBlock
+ *  edges, two loops as edge_block_terms: one edge's chain from the node
+ *  loads through the square roots and the division to its force factors is
+ *  about 130 cycles long and its whole loop body did not fit the core's
+ *  reorder window twice, so one loop ran at the chain's latency; split,
+ *  each loop's iterations overlap. Node: NodeLanes. */
+constexpr int kBatchBlock = 16;
+template <bool neo, bool visc, bool bend, class Node>
+bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, const int* ea,
+                      const int* ec, const int* ed, int n_edges, const double* r0,
+                      const double* inv_r0, const double* cos_psi0, const double* sin_psi0,
+                      const OifLocalForces& ia) {
+  const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
+  const Lanes zero = splat(0.0), one = splat(1.0);
+  LaneMask bad = zero > one;
+  // per edge of a block: e, the wing normals n1, n2 (bend), the stretching
+  // coefficient and the bending factors
+  struct alignas(32) EdgeLanes {
+    Lanes e[3], n1[3], n2[3], coefficient, ca, cd, ta, td;
+  };
+  EdgeLanes blk[kBatchBlock];
+  for (int first = 0; first < n_edges; first += kBatchBlock) {
+    const int nb = std::min(kBatchBlock, n_edges - first);
+    for (int i = 0; i < nb; ++i) {
+      const int k = first + i;
+      EdgeLanes& out = blk[i];
+      const Node& xb = x[eb[k]];
+      const Lanes ex = x[ec[k]].c[0] - xb.c[0], ey = x[ec[k]].c[1] - xb.c[1],
+                  ez = x[ec[k]].c[2] - xb.c[2];
+      const Lanes l2 = ex * ex + ey * ey + ez * ez;
+      bad |= ~(l2 > zero);
+      const Lanes l = sqrt_lanes(l2);
+      Lanes n1x = zero, n1y = zero, n1z = zero, n2x = zero, n2y = zero, n2z = zero;
+      Lanes n1_2 = one, n2_2 = one, ue = zero, we = zero;
+      Lanes sine = zero, cosine = one, tangent_denominator = one, n1n2 = one;
+      LaneMask small = zero < one;
+      if constexpr (bend) { // the wing triangles
+        const Node &xa = x[ea[k]], &xd = x[ed[k]];
+        const Lanes ux = xa.c[0] - xb.c[0], uy = xa.c[1] - xb.c[1], uz = xa.c[2] - xb.c[2];
+        const Lanes wx = xd.c[0] - xb.c[0], wy = xd.c[1] - xb.c[1], wz = xd.c[2] - xb.c[2];
+        n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
+        n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
+        n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
+        n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
+        bad |= ~(n1_2 > zero) | ~(n2_2 > zero);
+        ue = ux * ex + uy * ey + uz * ez;
+        we = wx * ex + wy * ey + wz * ez;
+        const Lanes y = l * (n1x * wx + n1y * wy + n1z * wz);
+        const Lanes xn = n1x * n2x + n1y * n2y + n1z * n2z;
+        const double c0 = cos_psi0[k], s0 = sin_psi0[k];
+        sine = y * c0 - xn * s0;
+        cosine = xn * c0 + y * s0;
+        const Lanes abs_sine = sine < zero ? -sine : sine;
+        small = (cosine > zero) & (abs_sine <= 0.25 * cosine);
+        tangent_denominator = small ? cosine : one;
+        n1n2 = n1_2 * n2_2;
+      }
+      Lanes lambda = one, lambda2 = one, kappa_denominator = one;
+      if constexpr (neo) {
+        lambda = l * inv_r0[k];
+        lambda2 = lambda * lambda;
+        kappa_denominator = lambda2 * lambda2 + 1.0;
+      }
+      const Lanes p = l2 * kappa_denominator, q = tangent_denominator * n1n2;
+      const Lanes r = 1.0 / (p * q);
+      const Lanes inv_l2 = r * kappa_denominator * q;
+      const Lanes stretch = (l - r0[k]) * l * inv_l2;
+      Lanes coefficient = kslin * stretch;
+      if constexpr (neo)
+        coefficient +=
+            ks * (sqrt_lanes(lambda) * (lambda2 * lambda + 1.0) * (r * l2 * q)) * stretch;
+      if constexpr (visc) {
+        const Node &vb = v[eb[k]], &vc = v[ec[k]];
+        const Lanes dvx = vc.c[0] - vb.c[0], dvy = vc.c[1] - vb.c[1], dvz = vc.c[2] - vb.c[2];
+        coefficient += kvisc * (dvx * ex + dvy * ey + dvz * ez) * inv_l2;
+      }
+      out.e[0] = ex, out.e[1] = ey, out.e[2] = ez;
+      out.coefficient = coefficient;
+      if constexpr (bend) {
+        Lanes dphi = -atan_small(small ? sine * (r * p * n1n2) : zero);
+        if (any_lane(~small)) // deviations beyond atan(1/4): the library's arctangent
+          for (int j = 0; j < 4; ++j)
+            if (!small[j]) {
+              dphi[j] = -std::atan2(sine[j], cosine[j]);
+              if (dphi[j] <= -M_PI) // into (-pi, pi] as the generic bending
+                dphi[j] += 2.0 * M_PI;
+            }
+        const Lanes inv_n1n2 = r * p * tangent_denominator;
+        const Lanes c = kb * dphi * l * inv_n1n2;
+        out.ca = c * n2_2, out.cd = c * n1_2;
+        out.ta = ue * inv_l2, out.td = we * inv_l2;
+        out.n1[0] = n1x, out.n1[1] = n1y, out.n1[2] = n1z;
+        out.n2[0] = n2x, out.n2[1] = n2y, out.n2[2] = n2z;
+      }
+    }
+    // F = -kb dphi grad phi (see edge_block_terms), added to the nodes
+    for (int i = 0; i < nb; ++i) {
+      const int k = first + i;
+      const EdgeLanes& in = blk[i];
+      Node &fb = f[eb[k]], &fc = f[ec[k]];
+      if constexpr (bend) {
+        Node &fa = f[ea[k]], &fd = f[ed[k]];
+        for (int d = 0; d < 3; ++d) {
+          const Lanes fe = in.coefficient * in.e[d];
+          const Lanes fa_ = in.ca * in.n1[d], fd_ = in.cd * in.n2[d];
+          fb.c[d] += fe - ((1.0 - in.ta) * fa_ + (1.0 - in.td) * fd_);
+          fc.c[d] += -fe - (in.ta * fa_ + in.td * fd_);
+          fa.c[d] += fa_;
+          fd.c[d] += fd_;
+        }
+      } else {
+        for (int d = 0; d < 3; ++d) {
+          const Lanes fe = in.coefficient * in.e[d];
+          fb.c[d] += fe;
+          fc.c[d] += -fe;
+        }
+      }
+    }
+  }
+  return !any_lane(bad);
+}
+
+/** batch_edge_terms for the terms that are on (one instantiation per
+ *  combination, as edge_block_forces; the wings come with bending, as in
+ *  evaluate_cell). */
+template <class Node>
+bool batch_edge_forces(const Node* x, const Node* v, Node* f, const int* eb, const int* ea,
+                       const int* ec, const int* ed, int n_edges, const double* r0,
+                       const double* inv_r0, const double* cos_psi0, const double* sin_psi0,
+                       const OifLocalForces& ia) {
+  const bool neo = ia.ks != 0.0, visc = ia.kvisc != 0.0, bend = ia.kb != 0.0;
+  auto with = [&](auto neo_, auto visc_, auto bend_) {
+    return batch_edge_terms<decltype(neo_)::value, decltype(visc_)::value, decltype(bend_)::value>(
+        x, v, f, eb, ea, ec, ed, n_edges, r0, inv_r0, cos_psi0, sin_psi0, ia);
+  };
+  using yes = std::true_type;
+  using no = std::false_type;
+  auto by_bend = [&](auto neo_, auto visc_) {
+    return bend ? with(neo_, visc_, yes{}) : with(neo_, visc_, no{});
+  };
+  if (neo)
+    return visc ? by_bend(yes{}, yes{}) : by_bend(yes{}, no{});
+  return visc ? by_bend(no{}, yes{}) : by_bend(no{}, no{});
 }
 
 /** A triangle's key, independent of its orientation: its three slots sorted,
@@ -853,7 +1050,7 @@ bool FastBondPlan::run(const OifGlobalForces& ia, const BondGroup& group, Partic
     }
     if (bad)
       return false;
-    AreaVolumeSums sums(n);
+    AreaVolumeSums<> sums(n);
     sums.add(area, vol, 0, n);
     const double cell_area = sums.area(), cell_volume = sums.volume();
     if (!(cell_area > 0.0))
@@ -1081,8 +1278,13 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
     largest_tri = std::max<std::size_t>(largest_tri, r.triangle_end - r.triangle_begin);
   }
   share_cell_tables();
+  form_batches();
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
+  const Lanes zero{0.0, 0.0, 0.0, 0.0};
+  m_batch_node.assign(m_batches.empty() ? 0 : kNodeArrays * largest_nodes,
+                      NodeLanes{{zero, zero, zero}});
+  m_batch_tri.assign(m_batches.empty() ? 0 : 2 * largest_tri, zero);
   m_f.resize(n_slots);
   return true;
 }
@@ -1159,11 +1361,11 @@ void FusedMembranePlan::share_cell_tables() {
   }
 }
 
-bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
-                                    const BoxGeometry& box, bool velocities, bool* regroup) {
+template <class Store, class StoreVelocity>
+bool FusedMembranePlan::gather_cell_with(std::size_t cell, const ParticleStore& p,
+                                         const BoxGeometry& box, bool velocities, bool* regroup,
+                                         Store&& store, StoreVelocity&& store_velocity) const {
   const CellRange& r = m_cells[cell];
-  const std::size_t section = m_node.size() / kNodeArrays; // largest cell's nodes
-  Node4* const x = m_node.data();
   const Vec3& L = box.length();
   const int ref = m_index[r.node_begin];
   const Vec3 pos_r = p.pos[ref];
@@ -1176,7 +1378,7 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
     // unfolded relative to the reference node, the image difference first
     // (integers, exact), as FastBondPlan::gather_relative
     const Vec3 xk = (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(L);
-    x[s - r.node_begin].v = Lanes{xk[0], xk[1], xk[2], 0.0};
+    store(s - r.node_begin, xk);
     low = low.cwiseMin(xk);
     high = high.cwiseMax(xk);
   }
@@ -1190,13 +1392,44 @@ bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
   for (int d = 0; d < 3; ++d)
     if (box.periodic()[d] && high[d] - low[d] > 0.5 * L[d])
       return false;
-  if (velocities) {
-    Node4* const v = m_node.data() + section;
-    for (int s = r.node_begin; s < r.node_end; ++s) {
-      const Vec3& vk = p.vel[m_index[s]];
-      v[s - r.node_begin].v = Lanes{vk[0], vk[1], vk[2], 0.0};
-    }
-  }
+  if (velocities)
+    for (int s = r.node_begin; s < r.node_end; ++s)
+      store_velocity(s - r.node_begin, p.vel[m_index[s]]);
+  return true;
+}
+
+bool FusedMembranePlan::gather_cell(std::size_t cell, const ParticleStore& p,
+                                    const BoxGeometry& box, bool velocities, bool* regroup) {
+  const std::size_t section = m_node.size() / kNodeArrays; // largest cell's nodes
+  Node4* const x = m_node.data();
+  Node4* const v = m_node.data() + section;
+  return gather_cell_with(
+      cell, p, box, velocities, regroup,
+      [x](int k, const Vec3& xk) {
+        x[k].v = Lanes{xk[0], xk[1], xk[2], 0.0};
+      },
+      [v](int k, const Vec3& vk) {
+        v[k].v = Lanes{vk[0], vk[1], vk[2], 0.0};
+      });
+}
+
+bool FusedMembranePlan::gather_batch(const Batch& batch, const ParticleStore& p,
+                                     const BoxGeometry& box, bool velocities, bool* regroup) {
+  const std::size_t section = m_batch_node.size() / kNodeArrays;
+  NodeLanes* const x = m_batch_node.data();
+  NodeLanes* const v = m_batch_node.data() + section;
+  for (int lane = 0; lane < kBatchCells; ++lane)
+    if (!gather_cell_with(
+            batch.cell[lane], p, box, velocities, regroup,
+            [x, lane](int k, const Vec3& xk) {
+              for (int d = 0; d < 3; ++d)
+                x[k].c[d][lane] = xk[d];
+            },
+            [v, lane](int k, const Vec3& vk) {
+              for (int d = 0; d < 3; ++d)
+                v[k].c[d][lane] = vk[d];
+            }))
+      return false;
   return true;
 }
 
@@ -1240,7 +1473,7 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   const Lanes origin = x[r.origin].v;
   constexpr double third = 1.0 / 3.0;
   static_assert(kBlock % 4 == 0, "AreaVolumeSums: blocks start at multiples of 4");
-  AreaVolumeSums sums(n_tri);
+  AreaVolumeSums<> sums(n_tri);
   int bad = 0;
   for (int first = 0; first < n_tri; first += kBlock) {
     const int nb = std::min(kBlock, n_tri - first);
@@ -1295,16 +1528,11 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   }
   if (bad)
     return false;
-  const double cell_area = sums.area(), cell_volume = sums.volume();
+  const double cell_area = sums.area();
   if (!(cell_area > 0.0))
     return false;
-  const double ka_g = global_ia.ka_g, kv = global_ia.kv, A0_g = global_ia.A0_g, V0 = global_ia.V0;
-  // global area (eq. 6): kag (S_cell - S_cell0) / S_cell0 times g
-  const double area_factor = ka_g != 0.0 ? ka_g * (cell_area - A0_g) / A0_g : 0.0;
-  // volume (eq. 7): F = -kv (|V| - V0) / V0 s N / 6 on each vertex
-  const double sign = cell_volume < 0.0 ? -1.0 : 1.0;
-  const double volume_factor =
-      kv != 0.0 ? -kv * ((sign * cell_volume - V0) / V0) * sign / 6.0 : 0.0;
+  const CellFactors factors(cell_area, sums.volume(), global_ia);
+  const double area_factor = factors.area, volume_factor = factors.volume, sign = factors.sign;
 
   // the area forces along (T - p_i) on the vertices, T - p0 = (e1 + e2) / 3,
   // as vectors per triangle; the normals N summed per node (the volume
@@ -1414,6 +1642,167 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   return true;
 }
 
+bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces& local_ia,
+                                       const OifGlobalForces& global_ia, bool write_normals,
+                                       ParticleStore& p) {
+  // the cells share their tables (form_batches): the first one's ranges
+  const CellRange& r = m_cells[batch.cell[0]];
+  const int n_nodes = r.node_end - r.node_begin, n_tri = r.triangle_end - r.triangle_begin;
+  const std::size_t section = m_batch_node.size() / kNodeArrays, ts = m_batch_tri.size() / 2;
+  const NodeLanes* const x = m_batch_node.data();
+  const NodeLanes* const v = m_batch_node.data() + section;
+  NodeLanes* const f = m_batch_node.data() + 2 * section;
+  NodeLanes* const nsum = m_batch_node.data() + 3 * section;
+  const Lanes zero = splat(0.0);
+  for (int k = 0; k < n_nodes; ++k)
+    for (int d = 0; d < 3; ++d) {
+      f[k].c[d] = zero;
+      nsum[k].c[d] = zero;
+    }
+  Lanes* const g = m_batch_tri.data();
+  Lanes* const coef = m_batch_tri.data() + ts;
+  const int *const v0 = m_tri_v0.data() + r.triangle_begin,
+                   *const v1 = m_tri_v1.data() + r.triangle_begin,
+                   *const v2 = m_tri_v2.data() + r.triangle_begin;
+  const double* const weight = m_tri_weight.data() + r.triangle_begin;
+  const double* const area0 = m_tri_area0.data() + r.triangle_begin;
+
+  // Triangle pass of evaluate_cell, one triangle at a time for the four
+  // cells; the normal sums here already (they do not wait for the cell's
+  // factors; the same additions in the same order)
+  const double kal = local_ia.kal;
+  const NodeLanes origin = x[r.origin];
+  constexpr double third = 1.0 / 3.0;
+  const bool normal_sums = global_ia.kv != 0.0 || write_normals;
+  AreaVolumeSums<Lanes> sums(n_tri);
+  LaneMask bad = zero > zero;
+  for (int q = 0; q < n_tri; ++q) {
+    const NodeLanes &a = x[v0[q]], &b = x[v1[q]], &c = x[v2[q]];
+    Lanes e1[3], e2[3], ra[3];
+    for (int d = 0; d < 3; ++d) {
+      e1[d] = b.c[d] - a.c[d];
+      e2[d] = c.c[d] - a.c[d];
+      ra[d] = a.c[d] - origin.c[d];
+    }
+    const Lanes nx = e1[1] * e2[2] - e1[2] * e2[1];
+    const Lanes ny = e1[2] * e2[0] - e1[0] * e2[2];
+    const Lanes nz = e1[0] * e2[1] - e1[1] * e2[0];
+    const Lanes area = 0.5 * sqrt_lanes(nx * nx + ny * ny + nz * nz);
+    bad |= ~(area > zero);
+    sums.add_one(q, area, ra[0] * nx + ra[1] * ny + ra[2] * nz);
+    const Lanes m0x = (e1[0] + e2[0]) * third, m0y = (e1[1] + e2[1]) * third,
+                m0z = (e1[2] + e2[2]) * third;
+    const Lanes m1x = m0x - e1[0], m1y = m0y - e1[1], m1z = m0z - e1[2];
+    const Lanes m2x = m0x - e2[0], m2y = m0y - e2[1], m2z = m0z - e2[2];
+    const Lanes inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
+                                   m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
+    g[q] = area * inv_norm2;
+    coef[q] = kal * (weight[q] * area - area0[q]) * inv_norm2;
+    if (normal_sums) {
+      const Lanes n_[3] = {nx, ny, nz};
+      for (int d = 0; d < 3; ++d) {
+        nsum[v0[q]].c[d] += n_[d];
+        nsum[v1[q]].c[d] += n_[d];
+        nsum[v2[q]].c[d] += n_[d];
+      }
+    }
+  }
+  if (any_lane(bad))
+    return false;
+  const Lanes cell_area = sums.area(), cell_volume = sums.volume();
+  Lanes area_factor, volume_factor, sign;
+  for (int j = 0; j < kBatchCells; ++j) {
+    if (!(cell_area[j] > 0.0))
+      return false;
+    const CellFactors factors(cell_area[j], cell_volume[j], global_ia);
+    area_factor[j] = factors.area;
+    volume_factor[j] = factors.volume;
+    sign[j] = factors.sign;
+  }
+  // the area forces along (T - p_i), as evaluate_cell
+  for (int q = 0; q < n_tri; ++q) {
+    const Lanes cq = coef[q] + area_factor * g[q];
+    const NodeLanes &a = x[v0[q]], &b = x[v1[q]], &c = x[v2[q]];
+    for (int d = 0; d < 3; ++d) {
+      const Lanes e1 = b.c[d] - a.c[d], e2 = c.c[d] - a.c[d], m0 = (e1 + e2) * third;
+      f[v0[q]].c[d] += cq * m0;
+      f[v1[q]].c[d] += cq * (m0 - e1);
+      f[v2[q]].c[d] += cq * (m0 - e2);
+    }
+  }
+  // the edge pass
+  const int first = r.edge_begin;
+  if (!batch_edge_forces(x, v, f, m_edge_b.data() + first, m_edge_a.data() + first,
+                         m_edge_c.data() + first, m_edge_d.data() + first,
+                         r.edge_end - r.edge_begin, m_edge_r0.data() + first,
+                         m_edge_inv_r0.data() + first, m_edge_cos_psi0.data() + first,
+                         m_edge_sin_psi0.data() + first, local_ia))
+    return false;
+  // per node, as evaluate_cell: the volume force along the normal sum, a
+  // finite check, the normals straight into the particles (here as sum
+  // times sign / |sum|, one division for the four cells instead of three
+  // per cell: equal to evaluate_cell's within an ulp)
+  const double largest = std::numeric_limits<double>::max();
+  LaneMask finite = zero < splat(1.0);
+  Vec3* cell_force[kBatchCells];
+  const int* cell_index[kBatchCells];
+  for (int j = 0; j < kBatchCells; ++j) {
+    cell_force[j] = m_f.data() + m_cells[batch.cell[j]].node_begin;
+    cell_index[j] = m_index.data() + m_cells[batch.cell[j]].node_begin;
+  }
+  for (int k = 0; k < n_nodes; ++k) {
+    Lanes fk[3];
+    for (int d = 0; d < 3; ++d) {
+      fk[d] = f[k].c[d] + volume_factor * nsum[k].c[d];
+      finite &= (fk[d] <= largest) & (fk[d] >= -largest);
+    }
+    for (int j = 0; j < kBatchCells; ++j)
+      cell_force[j][k] = Vec3(fk[0][j], fk[1][j], fk[2][j]);
+    if (write_normals) {
+      const Lanes* n = nsum[k].c;
+      const Lanes len = sqrt_lanes(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const Lanes scale = len > zero ? sign / len : sign;
+      for (int j = 0; j < kBatchCells; ++j)
+        p.normal[cell_index[j][k]] =
+            Vec3(n[0][j] * scale[j], n[1][j] * scale[j], n[2][j] * scale[j]);
+    }
+  }
+  if (!(finite[0] & finite[1] & finite[2] & finite[3]))
+    return false;
+  return true;
+}
+
+void FusedMembranePlan::form_batches() {
+  // cells with one copy of the tables (the same ranges) and as many nodes,
+  // in order of their first cell
+  m_batches.clear();
+  m_single_cells.clear();
+  std::vector<std::vector<int>> kinds;
+  for (std::size_t c = 0; c < m_cells.size(); ++c) {
+    const CellRange& r = m_cells[c];
+    auto same = [&](const std::vector<int>& kind) {
+      const CellRange& t = m_cells[kind.front()];
+      return t.triangle_begin == r.triangle_begin && t.triangle_end == r.triangle_end &&
+             t.edge_begin == r.edge_begin && t.edge_end == r.edge_end && t.origin == r.origin &&
+             t.node_end - t.node_begin == r.node_end - r.node_begin;
+    };
+    auto kind = std::find_if(kinds.begin(), kinds.end(), same);
+    if (kind == kinds.end())
+      kinds.push_back({static_cast<int>(c)});
+    else
+      kind->push_back(static_cast<int>(c));
+  }
+  for (const auto& kind : kinds) {
+    std::size_t i = 0;
+    for (; i + kBatchCells <= kind.size(); i += kBatchCells) {
+      Batch b;
+      std::copy(kind.begin() + i, kind.begin() + i + kBatchCells, b.cell);
+      m_batches.push_back(b);
+    }
+    m_single_cells.insert(m_single_cells.end(), kind.begin() + i, kind.end());
+  }
+}
+
 bool FusedMembranePlan::run(const OifLocalForces& local_ia, const BondGroup& local,
                             const OifGlobalForces& global_ia, const BondGroup& global,
                             bool write_normals, ParticleStore& p, const BoxGeometry& box) {
@@ -1427,16 +1816,23 @@ bool FusedMembranePlan::run(const OifLocalForces& local_ia, const BondGroup& loc
   if (!m_usable)
     return false;
   const bool velocities = local_ia.kvisc != 0.0;
-  for (std::size_t cell = 0; cell < m_cells.size(); ++cell) {
+  // a mol_id changed: the cells regroup (or the groups no longer pair up)
+  auto rebuild_and_run = [&] {
+    m_usable = build(local, global, p);
+    ++m_n_builds;
+    return m_usable && run(local_ia, local, global_ia, global, write_normals, p, box);
+  };
+  for (const Batch& batch : m_batches) {
     bool regroup = false;
-    if (!gather_cell(cell, p, box, velocities, &regroup)) {
-      if (!regroup)
-        return false;
-      // a mol_id changed: the cells regroup (or the groups no longer pair up)
-      m_usable = build(local, global, p);
-      ++m_n_builds;
-      return m_usable && run(local_ia, local, global_ia, global, write_normals, p, box);
-    }
+    if (!gather_batch(batch, p, box, velocities, &regroup))
+      return regroup && rebuild_and_run();
+    if (!evaluate_batch(batch, local_ia, global_ia, write_normals, p))
+      return false;
+  }
+  for (const int cell : m_single_cells) {
+    bool regroup = false;
+    if (!gather_cell(cell, p, box, velocities, &regroup))
+      return regroup && rebuild_and_run();
     if (!evaluate_cell(cell, local_ia, global_ia, write_normals, p))
       return false;
   }

@@ -273,11 +273,44 @@ private:
    *  a periodic axis or a node's mol_id changed (*regroup set). */
   bool gather_cell(std::size_t cell, const ParticleStore& p, const BoxGeometry& box,
                    bool velocities, bool* regroup);
+  /** gather_cell's work for one cell: `store(k, x)` and, with velocities,
+   *  `store_velocity(k, v)` for its k-th node. */
+  template <class Store, class StoreVelocity>
+  bool gather_cell_with(std::size_t cell, const ParticleStore& p, const BoxGeometry& box,
+                        bool velocities, bool* regroup, Store&& store,
+                        StoreVelocity&& store_velocity) const;
   /** Forces of one cell into m_f, its normals (write_normals) into the
    *  particles; false on a degenerate triangle or edge or a non-finite
    *  force. */
   bool evaluate_cell(std::size_t cell, const OifLocalForces& local_ia,
                      const OifGlobalForces& global_ia, bool write_normals, ParticleStore& p);
+
+  /** Four cells with one copy of the tables (see share_cell_tables),
+   *  evaluated together, one cell per vector lane: the arithmetic of
+   *  evaluate_cell, operation for operation (the same forces bit for bit),
+   *  but a node's component of the four cells is one vector, so the
+   *  gathers and scatters of the triangle and edge passes are plain vector
+   *  loads and stores instead of the transposes and 4-lane node vectors of
+   *  the one-cell pass (which vectorises over the edges). */
+  static constexpr int kBatchCells = 4;
+  struct Batch {
+    int cell[kBatchCells];
+  };
+  std::vector<Batch> m_batches;
+  std::vector<int> m_single_cells; ///< cells evaluated one at a time
+  /** Groups the cells into batches (cells with the same tables, in order)
+   *  and singles; called at the end of a build. */
+  void form_batches();
+  /** A node of a batch: component d of the four cells in c[d]. */
+  struct alignas(32) NodeLanes {
+    Lanes c[3];
+  };
+  std::vector<NodeLanes> m_batch_node; ///< kNodeArrays x (largest cell's nodes)
+  std::vector<Lanes> m_batch_tri;      ///< 2 x (largest cell's triangles): g, coef
+  bool gather_batch(const Batch& batch, const ParticleStore& p, const BoxGeometry& box,
+                    bool velocities, bool* regroup);
+  bool evaluate_batch(const Batch& batch, const OifLocalForces& local_ia,
+                      const OifGlobalForces& global_ia, bool write_normals, ParticleStore& p);
 
   CachedGroupComparison m_same_particles;
 
