@@ -200,6 +200,122 @@ private:
   T m_area[4] = {}, m_vol[4] = {};
 };
 
+/** Lane helpers: the edge arithmetic below serves one edge (T = double, in
+ *  a loop that the compiler vectorises over a block of edges) and one edge
+ *  of four cells (T = Lanes). */
+inline double sqrt_of(double x) {
+  return std::sqrt(x);
+}
+inline Lanes sqrt_of(Lanes x) {
+  return sqrt_lanes(x);
+}
+inline bool not_positive(double x) {
+  return !(x > 0.0);
+}
+inline LaneMask not_positive(Lanes x) {
+  return ~(x > splat(0.0));
+}
+inline double select(bool m, double a, double b) {
+  return m ? a : b;
+}
+inline Lanes select(LaneMask m, Lanes a, Lanes b) {
+  return m ? a : b;
+}
+/** Whether the polynomial arctangent covers a deviation (|tan| <= 1/4). */
+inline bool is_small_angle(double sine, double cosine) {
+  return cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+}
+inline LaneMask is_small_angle(Lanes sine, Lanes cosine) {
+  const Lanes zero = splat(0.0), abs_sine = sine < zero ? -sine : sine;
+  return (cosine > zero) & (abs_sine <= 0.25 * cosine);
+}
+
+/** One edge's terms (edge_terms). */
+template <class T> struct EdgeTerms {
+  using Mask = decltype(not_positive(T{}));
+  T l, inv_l2, coefficient;       ///< length, 1 / l^2, stretching (+ viscosity) / l
+  T n1[3], n2[3], n1_2, n2_2;     ///< wings: the triangles' normals, |n|^2
+  T sine, cosine, dphi, inv_n1n2; ///< bend: the deviation, 1 / (|n1|^2 |n2|^2)
+  Mask bad;                       ///< zero-length edge or degenerate wing
+  Mask small;                     ///< bend: dphi from the polynomial (else atan2)
+};
+
+/** The arithmetic of one edge (B, C) with wings A, D up to its force factors:
+ *  e = c - b, u = a - b, w = d - b, dv = v_c - v_b (visc). The wings' normals
+ *  n1 = u x e (triangle ABC) and n2 = e x w (BCD), |n| = twice the area; the
+ *  dihedral angle of oif_bending.hpp, psi = atan2((n1 x n2).e / l, n1.n2)
+ *  with (n1 x n2).e / l = l n1.w, phi - phi0 = -(psi - psi0), psi0 = pi -
+ *  phi0, taken as one angle (sine and cosine rotated by psi0); the
+ *  neo-Hookean kappa(lambda) = sqrt(lambda) (lambda^3 + 1) / (lambda^4 + 1)
+ *  (oif_edge_terms.hpp). The four quotients (1 / l^2, kappa's denominator,
+ *  the angle's tangent, 1 / (|n1|^2 |n2|^2)) share one division: the
+ *  divider, not the arithmetic, bounds the loops. dphi is that of the
+ *  polynomial (zero where !small: the caller takes atan2 there). */
+template <bool neo, bool visc, bool wings, bool bend, class T>
+__attribute__((always_inline)) inline EdgeTerms<T>
+edge_terms(const T (&e)[3], const T (&u)[3], const T (&w)[3], const T (&dv)[3], double r0,
+           double inv_r0, double cos_psi0, double sin_psi0, double ks, double kslin, double kvisc) {
+  static_assert(!bend || wings, "bending needs the wing triangles");
+  const T zero{}, one = zero + 1.0;
+  EdgeTerms<T> t;
+  const T ex = e[0], ey = e[1], ez = e[2];
+  const T l2 = ex * ex + ey * ey + ez * ez;
+  t.bad = not_positive(l2);
+  const T l = sqrt_of(l2);
+  t.l = l;
+  T n1x = zero, n1y = zero, n1z = zero, n2x = zero, n2y = zero, n2z = zero;
+  T n1_2 = one, n2_2 = one;
+  if constexpr (wings) {
+    const T ux = u[0], uy = u[1], uz = u[2], wx = w[0], wy = w[1], wz = w[2];
+    n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
+    n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
+    n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
+    n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
+    t.bad = t.bad | not_positive(n1_2) | not_positive(n2_2); // degenerate triangle
+    t.n1[0] = n1x, t.n1[1] = n1y, t.n1[2] = n1z;
+    t.n2[0] = n2x, t.n2[1] = n2y, t.n2[2] = n2z;
+    t.n1_2 = n1_2;
+    t.n2_2 = n2_2;
+  }
+  T sine = zero, cosine = one, tangent_denominator = one, n1n2 = one;
+  t.small = zero < one;
+  if constexpr (bend) {
+    const T y = l * (n1x * w[0] + n1y * w[1] + n1z * w[2]);
+    const T x = n1x * n2x + n1y * n2y + n1z * n2z;
+    sine = y * cos_psi0 - x * sin_psi0;
+    cosine = x * cos_psi0 + y * sin_psi0;
+    t.small = is_small_angle(sine, cosine);
+    tangent_denominator = select(t.small, cosine, one);
+    n1n2 = n1_2 * n2_2;
+  }
+  T lambda = one, lambda2 = one, kappa_denominator = one;
+  if constexpr (neo) {
+    lambda = l * inv_r0;
+    lambda2 = lambda * lambda;
+    kappa_denominator = lambda2 * lambda2 + 1.0;
+  }
+  // one reciprocal for the four quotients
+  const T p = l2 * kappa_denominator, q = tangent_denominator * n1n2;
+  const T r = 1.0 / (p * q);
+  const T inv_l2 = r * kappa_denominator * q;
+  t.inv_l2 = inv_l2;
+  // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
+  const T stretch = (l - r0) * l * inv_l2; // (l - l0) / l
+  T coefficient = kslin * stretch;
+  if constexpr (neo)
+    coefficient += ks * (sqrt_of(lambda) * (lambda2 * lambda + 1.0) * (r * l2 * q)) * stretch;
+  if constexpr (visc)
+    coefficient += kvisc * (dv[0] * ex + dv[1] * ey + dv[2] * ez) * inv_l2;
+  t.coefficient = coefficient;
+  if constexpr (bend) {
+    t.dphi = -atan_small(select(t.small, sine * (r * p * n1n2), zero));
+    t.inv_n1n2 = r * p * tangent_denominator;
+    t.sine = sine;
+    t.cosine = cosine;
+  }
+  return t;
+}
+
 /** The edge pass of edge_block_forces for one combination of terms known
  *  at compile time: neo (ks != 0), visc (kvisc != 0, dv set), wings (u, w
  *  set; n1, n2 and their squared lengths computed), bend (kb != 0; needs
@@ -218,70 +334,30 @@ bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* in
   int bad = 0, slow = 0;
   PYOIF_INDEPENDENT_ITERATIONS
   for (int k = 0; k < nb; ++k) {
-    const double ex = blk.e[0][k], ey = blk.e[1][k], ez = blk.e[2][k];
-    const double l2 = ex * ex + ey * ey + ez * ez;
-    bad |= !(l2 > 0.0);
-    const double l = std::sqrt(l2);
-    blk.l[k] = l;
-    // the triangles' normals n1 = (a - b) x e (triangle ABC) and
-    // n2 = e x (d - b) (BCD), |n| = twice the area
-    double n1x = 0.0, n1y = 0.0, n1z = 0.0, n2x = 0.0, n2y = 0.0, n2z = 0.0;
-    double n1_2 = 1.0, n2_2 = 1.0;
+    const double e[3] = {blk.e[0][k], blk.e[1][k], blk.e[2][k]};
+    const double u[3] = {blk.u[0][k], blk.u[1][k], blk.u[2][k]};
+    const double w[3] = {blk.w[0][k], blk.w[1][k], blk.w[2][k]};
+    const double dv[3] = {blk.dv[0][k], blk.dv[1][k], blk.dv[2][k]};
+    const EdgeTerms<double> t = edge_terms<neo, visc, wings, bend>(
+        e, u, w, dv, r0[k], inv_r0[k], cos_psi0[k], sin_psi0[k], ks, kslin, kvisc);
+    bad |= t.bad;
+    blk.l[k] = t.l;
     if constexpr (wings) {
-      const double ux = blk.u[0][k], uy = blk.u[1][k], uz = blk.u[2][k];
-      const double wx = blk.w[0][k], wy = blk.w[1][k], wz = blk.w[2][k];
-      n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
-      n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
-      n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
-      n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
-      bad |= !(n1_2 > 0.0) | !(n2_2 > 0.0); // degenerate triangle
-      blk.n1[0][k] = n1x, blk.n1[1][k] = n1y, blk.n1[2][k] = n1z;
-      blk.n2[0][k] = n2x, blk.n2[1][k] = n2y, blk.n2[2][k] = n2z;
-      blk.n1_2[k] = n1_2;
-      blk.n2_2[k] = n2_2;
+      for (int d = 0; d < 3; ++d) {
+        blk.n1[d][k] = t.n1[d];
+        blk.n2[d][k] = t.n2[d];
+      }
+      blk.n1_2[k] = t.n1_2;
+      blk.n2_2[k] = t.n2_2;
     }
-    // the dihedral angle of oif_bending.hpp: psi = atan2((n1 x n2).e / l,
-    // n1.n2) with (n1 x n2).e / l = l n1.w; phi - phi0 = -(psi - psi0),
-    // psi0 = pi - phi0, taken as one angle (sine and cosine rotated by psi0)
-    double sine = 0.0, cosine = 1.0, tangent_denominator = 1.0, n1n2 = 1.0;
-    bool small = true;
+    blk.inv_l2[k] = t.inv_l2;
+    blk.coefficient[k] = t.coefficient;
     if constexpr (bend) {
-      const double y = l * (n1x * blk.w[0][k] + n1y * blk.w[1][k] + n1z * blk.w[2][k]);
-      const double x = n1x * n2x + n1y * n2y + n1z * n2z;
-      const double c0 = cos_psi0[k], s0 = sin_psi0[k];
-      sine = y * c0 - x * s0;
-      cosine = x * c0 + y * s0;
-      small = cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
-      slow |= !small;
-      tangent_denominator = small ? cosine : 1.0;
-      n1n2 = n1_2 * n2_2;
-    }
-    // neo-Hookean kappa(lambda) = sqrt(lambda) (lambda^3 + 1) / (lambda^4 + 1)
-    // (oif_edge_terms.hpp)
-    double lambda = 1.0, lambda2 = 1.0, kappa_denominator = 1.0;
-    if constexpr (neo) {
-      lambda = l * inv_r0[k];
-      lambda2 = lambda * lambda;
-      kappa_denominator = lambda2 * lambda2 + 1.0;
-    }
-    // one reciprocal for the four quotients
-    const double p = l2 * kappa_denominator, q = tangent_denominator * n1n2;
-    const double r = 1.0 / (p * q);
-    const double inv_l2 = r * kappa_denominator * q;
-    blk.inv_l2[k] = inv_l2;
-    // stretching (eq. 3) and viscosity: force on b along e, c gets the opposite
-    const double stretch = (l - r0[k]) * l * inv_l2; // (l - l0) / l
-    double coefficient = kslin * stretch;
-    if constexpr (neo)
-      coefficient += ks * (std::sqrt(lambda) * (lambda2 * lambda + 1.0) * (r * l2 * q)) * stretch;
-    if constexpr (visc)
-      coefficient += kvisc * (blk.dv[0][k] * ex + blk.dv[1][k] * ey + blk.dv[2][k] * ez) * inv_l2;
-    blk.coefficient[k] = coefficient;
-    if constexpr (bend) {
-      blk.dphi[k] = -atan_small(small ? sine * (r * p * n1n2) : 0.0);
-      blk.inv_n1n2[k] = r * p * tangent_denominator;
-      blk.sine[k] = sine;
-      blk.cosine[k] = cosine;
+      slow |= !t.small;
+      blk.dphi[k] = t.dphi;
+      blk.inv_n1n2[k] = t.inv_n1n2;
+      blk.sine[k] = t.sine;
+      blk.cosine[k] = t.cosine;
     }
   }
   if (bad)
@@ -290,7 +366,7 @@ bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* in
     if (slow) // deviations beyond atan(1/4): the library's arctangent
       for (int k = 0; k < nb; ++k) {
         const double sine = blk.sine[k], cosine = blk.cosine[k];
-        if (cosine > 0.0 && std::abs(sine) <= 0.25 * cosine)
+        if (is_small_angle(sine, cosine))
           continue;
         double dphi = -std::atan2(sine, cosine);
         if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
@@ -370,8 +446,8 @@ struct CellFactors {
 };
 
 /** The edge pass of edge_block_terms for four cells at once, one per lane
- *  (FusedMembranePlan::evaluate_batch): per edge the same formulas in the
- *  same order on vectors of the four cells' values; the node components are
+ *  (FusedMembranePlan::evaluate_batch): per edge the same arithmetic
+ *  (edge_terms) on vectors of the four cells' values; the node components are
  *  loaded and the forces added as whole vectors. In blocks of kBatchBlock
  *  edges, two loops as edge_block_terms: one edge's chain from the node
  *  loads through the square roots and the division to its force factors is
@@ -385,8 +461,7 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
                       const double* inv_r0, const double* cos_psi0, const double* sin_psi0,
                       const OifLocalForces& ia) {
   const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
-  const Lanes zero = splat(0.0), one = splat(1.0);
-  LaneMask bad = zero > one;
+  LaneMask bad = splat(0.0) > splat(1.0);
   // per edge of a block: e, the wing normals n1, n2 (bend), the stretching
   // coefficient and the bending factors
   struct alignas(32) EdgeLanes {
@@ -399,72 +474,39 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       const int k = first + i;
       EdgeLanes& out = blk[i];
       const Node& xb = x[eb[k]];
-      const Lanes ex = x[ec[k]].c[0] - xb.c[0], ey = x[ec[k]].c[1] - xb.c[1],
-                  ez = x[ec[k]].c[2] - xb.c[2];
-      const Lanes l2 = ex * ex + ey * ey + ez * ez;
-      bad |= ~(l2 > zero);
-      const Lanes l = sqrt_lanes(l2);
-      Lanes n1x = zero, n1y = zero, n1z = zero, n2x = zero, n2y = zero, n2z = zero;
-      Lanes n1_2 = one, n2_2 = one, ue = zero, we = zero;
-      Lanes sine = zero, cosine = one, tangent_denominator = one, n1n2 = one;
-      LaneMask small = zero < one;
-      if constexpr (bend) { // the wing triangles
-        const Node &xa = x[ea[k]], &xd = x[ed[k]];
-        const Lanes ux = xa.c[0] - xb.c[0], uy = xa.c[1] - xb.c[1], uz = xa.c[2] - xb.c[2];
-        const Lanes wx = xd.c[0] - xb.c[0], wy = xd.c[1] - xb.c[1], wz = xd.c[2] - xb.c[2];
-        n1x = uy * ez - uz * ey, n1y = uz * ex - ux * ez, n1z = ux * ey - uy * ex;
-        n2x = ey * wz - ez * wy, n2y = ez * wx - ex * wz, n2z = ex * wy - ey * wx;
-        n1_2 = n1x * n1x + n1y * n1y + n1z * n1z;
-        n2_2 = n2x * n2x + n2y * n2y + n2z * n2z;
-        bad |= ~(n1_2 > zero) | ~(n2_2 > zero);
-        ue = ux * ex + uy * ey + uz * ez;
-        we = wx * ex + wy * ey + wz * ez;
-        const Lanes y = l * (n1x * wx + n1y * wy + n1z * wz);
-        const Lanes xn = n1x * n2x + n1y * n2y + n1z * n2z;
-        const double c0 = cos_psi0[k], s0 = sin_psi0[k];
-        sine = y * c0 - xn * s0;
-        cosine = xn * c0 + y * s0;
-        const Lanes abs_sine = sine < zero ? -sine : sine;
-        small = (cosine > zero) & (abs_sine <= 0.25 * cosine);
-        tangent_denominator = small ? cosine : one;
-        n1n2 = n1_2 * n2_2;
+      Lanes e[3], u[3], w[3], dv[3];
+      for (int d = 0; d < 3; ++d) {
+        e[d] = x[ec[k]].c[d] - xb.c[d];
+        if constexpr (bend) { // the wing triangles
+          u[d] = x[ea[k]].c[d] - xb.c[d];
+          w[d] = x[ed[k]].c[d] - xb.c[d];
+        }
+        if constexpr (visc)
+          dv[d] = v[ec[k]].c[d] - v[eb[k]].c[d];
       }
-      Lanes lambda = one, lambda2 = one, kappa_denominator = one;
-      if constexpr (neo) {
-        lambda = l * inv_r0[k];
-        lambda2 = lambda * lambda;
-        kappa_denominator = lambda2 * lambda2 + 1.0;
-      }
-      const Lanes p = l2 * kappa_denominator, q = tangent_denominator * n1n2;
-      const Lanes r = 1.0 / (p * q);
-      const Lanes inv_l2 = r * kappa_denominator * q;
-      const Lanes stretch = (l - r0[k]) * l * inv_l2;
-      Lanes coefficient = kslin * stretch;
-      if constexpr (neo)
-        coefficient +=
-            ks * (sqrt_lanes(lambda) * (lambda2 * lambda + 1.0) * (r * l2 * q)) * stretch;
-      if constexpr (visc) {
-        const Node &vb = v[eb[k]], &vc = v[ec[k]];
-        const Lanes dvx = vc.c[0] - vb.c[0], dvy = vc.c[1] - vb.c[1], dvz = vc.c[2] - vb.c[2];
-        coefficient += kvisc * (dvx * ex + dvy * ey + dvz * ez) * inv_l2;
-      }
-      out.e[0] = ex, out.e[1] = ey, out.e[2] = ez;
-      out.coefficient = coefficient;
+      const EdgeTerms<Lanes> t = edge_terms<neo, visc, bend, bend>(
+          e, u, w, dv, r0[k], inv_r0[k], cos_psi0[k], sin_psi0[k], ks, kslin, kvisc);
+      bad |= t.bad;
+      for (int d = 0; d < 3; ++d)
+        out.e[d] = e[d];
+      out.coefficient = t.coefficient;
       if constexpr (bend) {
-        Lanes dphi = -atan_small(small ? sine * (r * p * n1n2) : zero);
-        if (any_lane(~small)) // deviations beyond atan(1/4): the library's arctangent
+        Lanes dphi = t.dphi;
+        if (any_lane(~t.small)) // deviations beyond atan(1/4): the library's arctangent
           for (int j = 0; j < 4; ++j)
-            if (!small[j]) {
-              dphi[j] = -std::atan2(sine[j], cosine[j]);
+            if (!t.small[j]) {
+              dphi[j] = -std::atan2(t.sine[j], t.cosine[j]);
               if (dphi[j] <= -M_PI) // into (-pi, pi] as the generic bending
                 dphi[j] += 2.0 * M_PI;
             }
-        const Lanes inv_n1n2 = r * p * tangent_denominator;
-        const Lanes c = kb * dphi * l * inv_n1n2;
-        out.ca = c * n2_2, out.cd = c * n1_2;
-        out.ta = ue * inv_l2, out.td = we * inv_l2;
-        out.n1[0] = n1x, out.n1[1] = n1y, out.n1[2] = n1z;
-        out.n2[0] = n2x, out.n2[1] = n2y, out.n2[2] = n2z;
+        const Lanes c = kb * dphi * t.l * t.inv_n1n2;
+        out.ca = c * t.n2_2, out.cd = c * t.n1_2;
+        out.ta = (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * t.inv_l2;
+        out.td = (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) * t.inv_l2;
+        for (int d = 0; d < 3; ++d) {
+          out.n1[d] = t.n1[d];
+          out.n2[d] = t.n2[d];
+        }
       }
     }
     // F = -kb dphi grad phi (see edge_block_terms), added to the nodes
