@@ -47,7 +47,11 @@
 //    commit. Declines (each group's own plan) unless every triangle of a
 //    local bond is a global one and each connected set of triangles is one
 //    cell (one mol_id, no other set with it), and for a cell wider than half
-//    the box.
+//    the box. Cells with one copy of the tables (the cells of a type) go
+//    four at a time, one per vector lane (evaluate_batch: the same
+//    arithmetic, edge_terms<Lanes>, with plain vector loads and adds of the
+//    nodes' components); the rest of them (n mod 4) and cells of other
+//    tables one at a time, vectorised over their triangles and edges.
 // Forces are accumulated per slot and added to the particles only when the
 // whole group succeeded: on a degenerate or broken bond (or any non-finite
 // force) run() returns false without touching the particles, and the caller
