@@ -57,23 +57,27 @@ centroid_area_force(const double (&p0)[3], const double (&p1)[3], const double (
   }
 }
 
-/** Masks of lane comparisons (-1 where true) and their tests. */
-using LaneMask = decltype(Lanes{} > Lanes{});
-inline bool any_lane(LaneMask m) {
-  return (m[0] | m[1] | m[2] | m[3]) != 0;
+/** Vectors of doubles (GCC/Clang vector extension: Lanes, BatchLanes):
+ *  their comparisons give masks (-1 where true). */
+template <class V> using MaskOf = decltype(V{} > V{});
+template <class M> inline bool any_lane(M m) {
+  long long any = 0;
+  for (int j = 0; j < static_cast<int>(sizeof(M) / sizeof(long long)); ++j)
+    any |= m[j];
+  return any != 0;
 }
-inline Lanes splat(double x) {
-  return Lanes{x, x, x, x};
+template <class V> inline V splat(double x) {
+  return V{} + x;
 }
 /** Lane-wise square root, correctly rounded as std::sqrt. */
-inline Lanes sqrt_lanes(Lanes a) {
+template <class V> inline V sqrt_lanes(V a) {
 #if defined(__AVX__)
-  return reinterpret_cast<Lanes>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(a)));
-#else
-  for (int j = 0; j < 4; ++j)
+  if constexpr (sizeof(V) == 32)
+    return reinterpret_cast<V>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(a)));
+#endif
+  for (int j = 0; j < static_cast<int>(sizeof(V) / sizeof(double)); ++j)
     a[j] = std::sqrt(a[j]);
   return a;
-#endif
 }
 
 /** atan(t) for |t| <= 1/4 (dihedral deviations below 14 degrees, most of a
@@ -87,7 +91,7 @@ template <class T> inline T atan_small(T t) {
   if constexpr (std::is_same_v<T, double>)
     pz = 0.04599761088928747;
   else
-    pz = splat(0.04599761088928747);
+    pz = splat<T>(0.04599761088928747);
   pz = pz * s - 0.06523656687585018;
   pz = pz * s + 0.07683492919828101;
   pz = pz * s - 0.09090589248444612;
@@ -203,31 +207,29 @@ private:
 /** Lane helpers: the edge arithmetic below serves one edge (T = double, in
  *  a loop that the compiler vectorises over a block of edges) and one edge
  *  of four cells (T = Lanes). */
-inline double sqrt_of(double x) {
-  return std::sqrt(x);
+template <class T> inline T sqrt_of(T x) {
+  if constexpr (std::is_same_v<T, double>)
+    return std::sqrt(x);
+  else
+    return sqrt_lanes(x);
 }
-inline Lanes sqrt_of(Lanes x) {
-  return sqrt_lanes(x);
+template <class T> inline auto not_positive(T x) {
+  if constexpr (std::is_same_v<T, double>)
+    return !(x > 0.0);
+  else
+    return ~(x > T{});
 }
-inline bool not_positive(double x) {
-  return !(x > 0.0);
-}
-inline LaneMask not_positive(Lanes x) {
-  return ~(x > splat(0.0));
-}
-inline double select(bool m, double a, double b) {
-  return m ? a : b;
-}
-inline Lanes select(LaneMask m, Lanes a, Lanes b) {
+template <class T, class M> inline T select(M m, T a, T b) {
   return m ? a : b;
 }
 /** Whether the polynomial arctangent covers a deviation (|tan| <= 1/4). */
-inline bool is_small_angle(double sine, double cosine) {
-  return cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
-}
-inline LaneMask is_small_angle(Lanes sine, Lanes cosine) {
-  const Lanes zero = splat(0.0), abs_sine = sine < zero ? -sine : sine;
-  return (cosine > zero) & (abs_sine <= 0.25 * cosine);
+template <class T> inline auto is_small_angle(T sine, T cosine) {
+  if constexpr (std::is_same_v<T, double>) {
+    return cosine > 0.0 && std::abs(sine) <= 0.25 * cosine;
+  } else {
+    const T zero{}, abs_sine = sine < zero ? -sine : sine;
+    return (cosine > zero) & (abs_sine <= 0.25 * cosine);
+  }
 }
 
 /** One edge's terms (edge_terms). */
@@ -461,11 +463,11 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
                       const double* inv_r0, const double* cos_psi0, const double* sin_psi0,
                       const OifLocalForces& ia) {
   const double ks = ia.ks, kslin = ia.kslin, kvisc = ia.kvisc, kb = ia.kb;
-  LaneMask bad = splat(0.0) > splat(1.0);
+  MaskOf<BatchLanes> bad = splat<BatchLanes>(0.0) > splat<BatchLanes>(1.0);
   // per edge of a block: e, the wing normals n1, n2 (bend), the stretching
   // coefficient and the bending factors
-  struct alignas(32) EdgeLanes {
-    Lanes e[3], n1[3], n2[3], coefficient, ca, cd, ta, td;
+  struct alignas(sizeof(BatchLanes)) EdgeLanes {
+    BatchLanes e[3], n1[3], n2[3], coefficient, ca, cd, ta, td;
   };
   EdgeLanes blk[kBatchBlock];
   for (int first = 0; first < n_edges; first += kBatchBlock) {
@@ -474,7 +476,7 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       const int k = first + i;
       EdgeLanes& out = blk[i];
       const Node& xb = x[eb[k]];
-      Lanes e[3], u[3], w[3], dv[3];
+      BatchLanes e[3], u[3], w[3], dv[3];
       for (int d = 0; d < 3; ++d) {
         e[d] = x[ec[k]].c[d] - xb.c[d];
         if constexpr (bend) { // the wing triangles
@@ -484,22 +486,22 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
         if constexpr (visc)
           dv[d] = v[ec[k]].c[d] - v[eb[k]].c[d];
       }
-      const EdgeTerms<Lanes> t = edge_terms<neo, visc, bend, bend>(
+      const EdgeTerms<BatchLanes> t = edge_terms<neo, visc, bend, bend>(
           e, u, w, dv, r0[k], inv_r0[k], cos_psi0[k], sin_psi0[k], ks, kslin, kvisc);
       bad |= t.bad;
       for (int d = 0; d < 3; ++d)
         out.e[d] = e[d];
       out.coefficient = t.coefficient;
       if constexpr (bend) {
-        Lanes dphi = t.dphi;
+        BatchLanes dphi = t.dphi;
         if (any_lane(~t.small)) // deviations beyond atan(1/4): the library's arctangent
-          for (int j = 0; j < 4; ++j)
+          for (int j = 0; j < static_cast<int>(sizeof(BatchLanes) / sizeof(double)); ++j)
             if (!t.small[j]) {
               dphi[j] = -std::atan2(t.sine[j], t.cosine[j]);
               if (dphi[j] <= -M_PI) // into (-pi, pi] as the generic bending
                 dphi[j] += 2.0 * M_PI;
             }
-        const Lanes c = kb * dphi * t.l * t.inv_n1n2;
+        const BatchLanes c = kb * dphi * t.l * t.inv_n1n2;
         out.ca = c * t.n2_2, out.cd = c * t.n1_2;
         out.ta = (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * t.inv_l2;
         out.td = (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) * t.inv_l2;
@@ -517,8 +519,8 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       if constexpr (bend) {
         Node &fa = f[ea[k]], &fd = f[ed[k]];
         for (int d = 0; d < 3; ++d) {
-          const Lanes fe = in.coefficient * in.e[d];
-          const Lanes fa_ = in.ca * in.n1[d], fd_ = in.cd * in.n2[d];
+          const BatchLanes fe = in.coefficient * in.e[d];
+          const BatchLanes fa_ = in.ca * in.n1[d], fd_ = in.cd * in.n2[d];
           fb.c[d] += fe - ((1.0 - in.ta) * fa_ + (1.0 - in.td) * fd_);
           fc.c[d] += -fe - (in.ta * fa_ + in.td * fd_);
           fa.c[d] += fa_;
@@ -526,7 +528,7 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
         }
       } else {
         for (int d = 0; d < 3; ++d) {
-          const Lanes fe = in.coefficient * in.e[d];
+          const BatchLanes fe = in.coefficient * in.e[d];
           fb.c[d] += fe;
           fc.c[d] += -fe;
         }
@@ -1323,7 +1325,7 @@ bool FusedMembranePlan::build(const BondGroup& local, const BondGroup& global,
   form_batches();
   m_node.assign(kNodeArrays * largest_nodes, Node4{Lanes{0.0, 0.0, 0.0, 0.0}});
   m_tri.assign(kTriangleArrays * largest_tri, 0.0);
-  const Lanes zero{0.0, 0.0, 0.0, 0.0};
+  const BatchLanes zero{};
   m_batch_node.assign(m_batches.empty() ? 0 : kNodeArrays * largest_nodes,
                       NodeLanes{{zero, zero, zero}});
   m_batch_tri.assign(m_batches.empty() ? 0 : 2 * largest_tri, zero);
@@ -1695,14 +1697,14 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
   const NodeLanes* const v = m_batch_node.data() + section;
   NodeLanes* const f = m_batch_node.data() + 2 * section;
   NodeLanes* const nsum = m_batch_node.data() + 3 * section;
-  const Lanes zero = splat(0.0);
+  const BatchLanes zero = splat<BatchLanes>(0.0);
   for (int k = 0; k < n_nodes; ++k)
     for (int d = 0; d < 3; ++d) {
       f[k].c[d] = zero;
       nsum[k].c[d] = zero;
     }
-  Lanes* const g = m_batch_tri.data();
-  Lanes* const coef = m_batch_tri.data() + ts;
+  BatchLanes* const g = m_batch_tri.data();
+  BatchLanes* const coef = m_batch_tri.data() + ts;
   const int *const v0 = m_tri_v0.data() + r.triangle_begin,
                    *const v1 = m_tri_v1.data() + r.triangle_begin,
                    *const v2 = m_tri_v2.data() + r.triangle_begin;
@@ -1716,32 +1718,32 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
   const NodeLanes origin = x[r.origin];
   constexpr double third = 1.0 / 3.0;
   const bool normal_sums = global_ia.kv != 0.0 || write_normals;
-  AreaVolumeSums<Lanes> sums(n_tri);
-  LaneMask bad = zero > zero;
+  AreaVolumeSums<BatchLanes> sums(n_tri);
+  MaskOf<BatchLanes> bad = zero > zero;
   for (int q = 0; q < n_tri; ++q) {
     const NodeLanes &a = x[v0[q]], &b = x[v1[q]], &c = x[v2[q]];
-    Lanes e1[3], e2[3], ra[3];
+    BatchLanes e1[3], e2[3], ra[3];
     for (int d = 0; d < 3; ++d) {
       e1[d] = b.c[d] - a.c[d];
       e2[d] = c.c[d] - a.c[d];
       ra[d] = a.c[d] - origin.c[d];
     }
-    const Lanes nx = e1[1] * e2[2] - e1[2] * e2[1];
-    const Lanes ny = e1[2] * e2[0] - e1[0] * e2[2];
-    const Lanes nz = e1[0] * e2[1] - e1[1] * e2[0];
-    const Lanes area = 0.5 * sqrt_lanes(nx * nx + ny * ny + nz * nz);
+    const BatchLanes nx = e1[1] * e2[2] - e1[2] * e2[1];
+    const BatchLanes ny = e1[2] * e2[0] - e1[0] * e2[2];
+    const BatchLanes nz = e1[0] * e2[1] - e1[1] * e2[0];
+    const BatchLanes area = 0.5 * sqrt_lanes(nx * nx + ny * ny + nz * nz);
     bad |= ~(area > zero);
     sums.add_one(q, area, ra[0] * nx + ra[1] * ny + ra[2] * nz);
-    const Lanes m0x = (e1[0] + e2[0]) * third, m0y = (e1[1] + e2[1]) * third,
-                m0z = (e1[2] + e2[2]) * third;
-    const Lanes m1x = m0x - e1[0], m1y = m0y - e1[1], m1z = m0z - e1[2];
-    const Lanes m2x = m0x - e2[0], m2y = m0y - e2[1], m2z = m0z - e2[2];
-    const Lanes inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
-                                   m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
+    const BatchLanes m0x = (e1[0] + e2[0]) * third, m0y = (e1[1] + e2[1]) * third,
+                     m0z = (e1[2] + e2[2]) * third;
+    const BatchLanes m1x = m0x - e1[0], m1y = m0y - e1[1], m1z = m0z - e1[2];
+    const BatchLanes m2x = m0x - e2[0], m2y = m0y - e2[1], m2z = m0z - e2[2];
+    const BatchLanes inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
+                                        m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
     g[q] = area * inv_norm2;
     coef[q] = kal * (weight[q] * area - area0[q]) * inv_norm2;
     if (normal_sums) {
-      const Lanes n_[3] = {nx, ny, nz};
+      const BatchLanes n_[3] = {nx, ny, nz};
       for (int d = 0; d < 3; ++d) {
         nsum[v0[q]].c[d] += n_[d];
         nsum[v1[q]].c[d] += n_[d];
@@ -1751,8 +1753,8 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
   }
   if (any_lane(bad))
     return false;
-  const Lanes cell_area = sums.area(), cell_volume = sums.volume();
-  Lanes area_factor, volume_factor, sign;
+  const BatchLanes cell_area = sums.area(), cell_volume = sums.volume();
+  BatchLanes area_factor, volume_factor, sign;
   for (int j = 0; j < kBatchCells; ++j) {
     if (!(cell_area[j] > 0.0))
       return false;
@@ -1763,10 +1765,10 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
   }
   // the area forces along (T - p_i), as evaluate_cell
   for (int q = 0; q < n_tri; ++q) {
-    const Lanes cq = coef[q] + area_factor * g[q];
+    const BatchLanes cq = coef[q] + area_factor * g[q];
     const NodeLanes &a = x[v0[q]], &b = x[v1[q]], &c = x[v2[q]];
     for (int d = 0; d < 3; ++d) {
-      const Lanes e1 = b.c[d] - a.c[d], e2 = c.c[d] - a.c[d], m0 = (e1 + e2) * third;
+      const BatchLanes e1 = b.c[d] - a.c[d], e2 = c.c[d] - a.c[d], m0 = (e1 + e2) * third;
       f[v0[q]].c[d] += cq * m0;
       f[v1[q]].c[d] += cq * (m0 - e1);
       f[v2[q]].c[d] += cq * (m0 - e2);
@@ -1785,7 +1787,7 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
   // times sign / |sum|, one division for the four cells instead of three
   // per cell: equal to evaluate_cell's within an ulp)
   const double largest = std::numeric_limits<double>::max();
-  LaneMask finite = zero < splat(1.0);
+  MaskOf<BatchLanes> finite = zero < splat<BatchLanes>(1.0);
   Vec3* cell_force[kBatchCells];
   const int* cell_index[kBatchCells];
   for (int j = 0; j < kBatchCells; ++j) {
@@ -1793,7 +1795,7 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
     cell_index[j] = m_index.data() + m_cells[batch.cell[j]].node_begin;
   }
   for (int k = 0; k < n_nodes; ++k) {
-    Lanes fk[3];
+    BatchLanes fk[3];
     for (int d = 0; d < 3; ++d) {
       fk[d] = f[k].c[d] + volume_factor * nsum[k].c[d];
       finite &= (fk[d] <= largest) & (fk[d] >= -largest);
@@ -1801,9 +1803,9 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
     for (int j = 0; j < kBatchCells; ++j)
       cell_force[j][k] = Vec3(fk[0][j], fk[1][j], fk[2][j]);
     if (write_normals) {
-      const Lanes* n = nsum[k].c;
-      const Lanes len = sqrt_lanes(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      const Lanes scale = len > zero ? sign / len : sign;
+      const BatchLanes* n = nsum[k].c;
+      const BatchLanes len = sqrt_lanes(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const BatchLanes scale = len > zero ? sign / len : sign;
       for (int j = 0; j < kBatchCells; ++j)
         p.normal[cell_index[j][k]] =
             Vec3(n[0][j] * scale[j], n[1][j] * scale[j], n[2][j] * scale[j]);

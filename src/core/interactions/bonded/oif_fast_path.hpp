@@ -79,6 +79,11 @@ namespace pyoif::oif {
 /** A node's vector (x, y, z, 0) as one 4-lane register (GCC/Clang vector
  *  extension): the fused membrane pass keeps a cell's nodes in this form. */
 using Lanes = double __attribute__((vector_size(32)));
+/** The fused membrane pass's batches: one cell per lane. Four: eight
+ *  (512-bit vectors) made the pass only 2-7 % faster per cell at 8-60 cells,
+ *  as its loops are bound by the number of vector operations per lane, and
+ *  left 5 of them, the usual remainder, to the one-cell pass. */
+using BatchLanes = double __attribute__((vector_size(32)));
 
 template <class IA>
 constexpr bool has_fast_path =
@@ -296,7 +301,7 @@ private:
    *  gathers and scatters of the triangle and edge passes are plain vector
    *  loads and stores instead of the transposes and 4-lane node vectors of
    *  the one-cell pass (which vectorises over the edges). */
-  static constexpr int kBatchCells = 4;
+  static constexpr int kBatchCells = sizeof(BatchLanes) / sizeof(double);
   struct Batch {
     int cell[kBatchCells];
   };
@@ -306,11 +311,11 @@ private:
    *  and singles; called at the end of a build. */
   void form_batches();
   /** A node of a batch: component d of the four cells in c[d]. */
-  struct alignas(32) NodeLanes {
-    Lanes c[3];
+  struct alignas(sizeof(BatchLanes)) NodeLanes {
+    BatchLanes c[3];
   };
   std::vector<NodeLanes> m_batch_node; ///< kNodeArrays x (largest cell's nodes)
-  std::vector<Lanes> m_batch_tri;      ///< 2 x (largest cell's triangles): g, coef
+  std::vector<BatchLanes> m_batch_tri; ///< 2 x (largest cell's triangles): g, coef
   bool gather_batch(const Batch& batch, const ParticleStore& p, const BoxGeometry& box,
                     bool velocities, bool* regroup);
   bool evaluate_batch(const Batch& batch, const OifLocalForces& local_ia,
