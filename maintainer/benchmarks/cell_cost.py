@@ -64,7 +64,7 @@ def build(n_cells, fluid, seed=1):
     return system, rbc
 
 
-PHASES = ("bonded", "non_bonded", "constraints", "coupling", "lb_fluid", "other")
+PHASES = lbmd.system.Integrator.PHASES
 
 
 def time_runs(systems, steps, repeats):

@@ -47,6 +47,13 @@ class CellSystem:
         return self._system._core.n_rebuilds
 
 
+_TIMED_PHASES = (("bonded", "bonded: membrane moduli, bonds"),
+                 ("non_bonded", "non-bonded: pair contacts"),
+                 ("constraints", "constraints: walls"),
+                 ("coupling", "thermostat: fluid coupling or Langevin"),
+                 ("lb_fluid", "lattice-Boltzmann update"))
+
+
 class Integrator:
     """``system.integrator``: velocity Verlet."""
 
@@ -63,6 +70,10 @@ class Integrator:
 
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
+
+    #: the keys of ``timings()`` that divide its 'total' among the phases of
+    #: a step (they add up to it)
+    PHASES = tuple(key for key, _ in _TIMED_PHASES) + ("other",)
 
     def timings(self):
         """Where the time of the runs went, summed over all ``run()`` calls
@@ -94,13 +105,6 @@ class Integrator:
         lines.append(f"{'total (' + str(steps) + ' steps)':<44s} {total:10.3f} "
                      f"{(1e3 * total / steps if steps else 0.0):9.3f} {100.0 if total > 0 else 0.0:6.1f}%")
         return "\n".join(lines)
-
-
-_TIMED_PHASES = (("bonded", "bonded: membrane moduli, bonds"),
-                 ("non_bonded", "non-bonded: pair contacts"),
-                 ("constraints", "constraints: walls"),
-                 ("coupling", "thermostat: fluid coupling or Langevin"),
-                 ("lb_fluid", "lattice-Boltzmann update"))
 
 
 def _interruptible():
