@@ -232,6 +232,12 @@ class TestOifCell(unittest.TestCase):
             oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, ks=0.1, kslin=0.1)
         with self.assertRaisesRegex(ValueError, "'kb' must be >= 0"):
             oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, kb=-1.0)
+        # a modulus that is no number: TypeError; NaN or infinite: ValueError
+        # (as for every finite-number parameter of lbmd and oif)
+        with self.assertRaisesRegex(TypeError, "'kal' must be a number"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, kal="0.1")
+        with self.assertRaisesRegex(ValueError, "'kv' must be finite"):
+            oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, kv=float("nan"))
         with self.assertRaisesRegex(ValueError, "'resize'"):
             oif.OifCellType(*oif.mesh_files("rbc162"), system=self.system, resize=(1.0, 0.0, 1.0))
         with self.assertRaisesRegex(TypeError, "system"):

@@ -13,7 +13,6 @@ Orientation: stored triangles follow PyOIF's files, (B - A) x (C - A)
 pointing into the cell; the engine's triangle bonds get them outward.
 """
 import itertools
-import numbers
 import os
 import weakref
 
@@ -21,7 +20,7 @@ import numpy as np
 
 import lbmd
 from lbmd.particle_data import ParticleHandle
-from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, vector3 as _vector3
+from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, real_number as _real_number, vector3 as _vector3
 
 from . import geometry as geo
 from . import mesh_io
@@ -34,9 +33,7 @@ DEFAULT_EXCLUSION_RINGS = 2
 
 
 def _real(owner, name, value, check=None):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
-        raise TypeError(f"{owner}: parameter '{name}' must be a finite number, got {value!r}")
-    value = float(value)
+    value = _real_number(f"{owner}: parameter '{name}'", value)
     if check == "nonneg" and value < 0:
         raise ValueError(f"{owner}: parameter '{name}' must be >= 0, got {value!r}")
     if check == "pos" and value <= 0:
