@@ -84,7 +84,8 @@ template <class V> inline V sqrt_lanes(V a) {
  *  membrane's): t P(t^2), P the Chebyshev economisation on [0, 1/16] of the
  *  Taylor series of atan(sqrt s)/sqrt s, derived in exact rational arithmetic
  *  (dropped terms < 5e-18; largest relative error against libm's atan on 2e5
- *  random points 2.2e-16). Branch-free, so a block of bonds vectorises; T: double or Lanes. */
+ *  random points 2.2e-16). Branch-free, so a block of bonds vectorises; T:
+ *  double or a vector of them. */
 template <class T> inline T atan_small(T t) {
   const T s = t * t;
   T pz;
@@ -206,7 +207,7 @@ private:
 
 /** Lane helpers: the edge arithmetic below serves one edge (T = double, in
  *  a loop that the compiler vectorises over a block of edges) and one edge
- *  of four cells (T = Lanes). */
+ *  of four cells (T = BatchLanes). */
 template <class T> inline T sqrt_of(T x) {
   if constexpr (std::is_same_v<T, double>)
     return std::sqrt(x);
@@ -318,6 +319,46 @@ edge_terms(const T (&e)[3], const T (&u)[3], const T (&w)[3], const T (&dv)[3], 
   return t;
 }
 
+/** One triangle's terms of the fused triangle pass (evaluate_cell and
+ *  evaluate_batch; T = double or BatchLanes) from its edge vectors e1 = b -
+ *  a, e2 = c - a and its first vertex ra relative to the cell's reference
+ *  point: N = e1 x e2, the area S = |N|/2, the volume term ra.N (eqs. 6, 7),
+ *  and the two centroid allocations (oif_area.hpp), which share their
+ *  direction: vertex i gets (T - p_i) / sum_j |T - p_j|^2 times kal (weight
+ *  S - area0) for the local area (eq. 5; coef) and kag (S_cell - S_cell0) /
+ *  S_cell0 S for the global area (eq. 6; g, the cell's factor applied once
+ *  the cell's area is known). */
+template <class T> struct TriangleTerms { T nx, ny, nz, area, volume, g, coef; };
+template <class T>
+__attribute__((always_inline)) inline TriangleTerms<T>
+triangle_terms(const T (&e1)[3], const T (&e2)[3], const T (&ra)[3], double weight, double area0,
+               double kal) {
+  constexpr double third = 1.0 / 3.0;
+  TriangleTerms<T> t;
+  t.nx = e1[1] * e2[2] - e1[2] * e2[1];
+  t.ny = e1[2] * e2[0] - e1[0] * e2[2];
+  t.nz = e1[0] * e2[1] - e1[1] * e2[0];
+  t.area = 0.5 * sqrt_of(t.nx * t.nx + t.ny * t.ny + t.nz * t.nz);
+  t.volume = ra[0] * t.nx + ra[1] * t.ny + ra[2] * t.nz;
+  // centroid relative to the first vertex: T - p0 = (e1 + e2) / 3
+  const T m0x = (e1[0] + e2[0]) * third, m0y = (e1[1] + e2[1]) * third,
+          m0z = (e1[2] + e2[2]) * third;
+  const T m1x = m0x - e1[0], m1y = m0y - e1[1], m1z = m0z - e1[2];
+  const T m2x = m0x - e2[0], m2y = m0y - e2[1], m2z = m0z - e2[2];
+  const T inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y + m1z * m1z +
+                             m2x * m2x + m2y * m2y + m2z * m2z);
+  t.g = t.area * inv_norm2;
+  t.coef = kal * (weight * t.area - area0) * inv_norm2;
+  return t;
+}
+
+/** -atan2(sine, cosine) in (-pi, pi], as the generic bending: the
+ *  deviations that the polynomial (atan_small) does not cover. */
+inline double large_deviation(double sine, double cosine) {
+  const double dphi = -std::atan2(sine, cosine);
+  return dphi <= -M_PI ? dphi + 2.0 * M_PI : dphi;
+}
+
 /** The edge pass of edge_block_forces for one combination of terms known
  *  at compile time: neo (ks != 0), visc (kvisc != 0, dv set), wings (u, w
  *  set; n1, n2 and their squared lengths computed), bend (kb != 0; needs
@@ -337,9 +378,15 @@ bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* in
   PYOIF_INDEPENDENT_ITERATIONS
   for (int k = 0; k < nb; ++k) {
     const double e[3] = {blk.e[0][k], blk.e[1][k], blk.e[2][k]};
-    const double u[3] = {blk.u[0][k], blk.u[1][k], blk.u[2][k]};
-    const double w[3] = {blk.w[0][k], blk.w[1][k], blk.w[2][k]};
-    const double dv[3] = {blk.dv[0][k], blk.dv[1][k], blk.dv[2][k]};
+    double u[3] = {0.0, 0.0, 0.0}, w[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0};
+    for (int d = 0; d < 3; ++d) { // only what the gather set
+      if constexpr (wings) {
+        u[d] = blk.u[d][k];
+        w[d] = blk.w[d][k];
+      }
+      if constexpr (visc)
+        dv[d] = blk.dv[d][k];
+    }
     const EdgeTerms<double> t = edge_terms<neo, visc, wings, bend>(
         e, u, w, dv, r0[k], inv_r0[k], cos_psi0[k], sin_psi0[k], ks, kslin, kvisc);
     bad |= t.bad;
@@ -370,10 +417,7 @@ bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* in
         const double sine = blk.sine[k], cosine = blk.cosine[k];
         if (is_small_angle(sine, cosine))
           continue;
-        double dphi = -std::atan2(sine, cosine);
-        if (dphi <= -M_PI) // into (-pi, pi] as the generic bending
-          dphi += 2.0 * M_PI;
-        blk.dphi[k] = dphi;
+        blk.dphi[k] = large_deviation(sine, cosine);
       }
   // F = -kb dphi grad phi: on the wings kb dphi l n / |n|^2, the edge ends
   // split by the wings' foot points ta, td (oif_bending.hpp)
@@ -476,7 +520,7 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       const int k = first + i;
       EdgeLanes& out = blk[i];
       const Node& xb = x[eb[k]];
-      BatchLanes e[3], u[3], w[3], dv[3];
+      BatchLanes e[3], u[3] = {}, w[3] = {}, dv[3] = {};
       for (int d = 0; d < 3; ++d) {
         e[d] = x[ec[k]].c[d] - xb.c[d];
         if constexpr (bend) { // the wing triangles
@@ -496,11 +540,8 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
         BatchLanes dphi = t.dphi;
         if (any_lane(~t.small)) // deviations beyond atan(1/4): the library's arctangent
           for (int j = 0; j < static_cast<int>(sizeof(BatchLanes) / sizeof(double)); ++j)
-            if (!t.small[j]) {
-              dphi[j] = -std::atan2(t.sine[j], t.cosine[j]);
-              if (dphi[j] <= -M_PI) // into (-pi, pi] as the generic bending
-                dphi[j] += 2.0 * M_PI;
-            }
+            if (!t.small[j])
+              dphi[j] = large_deviation(t.sine[j], t.cosine[j]);
         const BatchLanes c = kb * dphi * t.l * t.inv_n1n2;
         out.ca = c * t.n2_2, out.cd = c * t.n1_2;
         out.ta = (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * t.inv_l2;
@@ -1548,25 +1589,16 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     PYOIF_INDEPENDENT_ITERATIONS
     for (int k = 0; k < nb; ++k) {
       const int q = first + k;
-      const double e1x_ = e1[0][k], e1y_ = e1[1][k], e1z_ = e1[2][k];
-      const double e2x_ = e2[0][k], e2y_ = e2[1][k], e2z_ = e2[2][k];
-      const double nx_ = e1y_ * e2z_ - e1z_ * e2y_;
-      const double ny_ = e1z_ * e2x_ - e1x_ * e2z_;
-      const double nz_ = e1x_ * e2y_ - e1y_ * e2x_;
-      const double s = 0.5 * std::sqrt(nx_ * nx_ + ny_ * ny_ + nz_ * nz_);
-      bad |= !(s > 0.0);
-      area[k] = s;
-      vol[k] = ra[0][k] * nx_ + ra[1][k] * ny_ + ra[2][k] * nz_;
-      nx[q] = nx_, ny[q] = ny_, nz[q] = nz_;
-      // centroid relative to the first vertex: T - p0 = (e1 + e2) / 3
-      const double m0x = (e1x_ + e2x_) * third, m0y = (e1y_ + e2y_) * third,
-                   m0z = (e1z_ + e2z_) * third;
-      const double m1x = m0x - e1x_, m1y = m0y - e1y_, m1z = m0z - e1z_;
-      const double m2x = m0x - e2x_, m2y = m0y - e2y_, m2z = m0z - e2z_;
-      const double inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
-                                      m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
-      g[q] = s * inv_norm2;
-      coef[q] = kal * (weight[q] * s - area0[q]) * inv_norm2;
+      const double e1_[3] = {e1[0][k], e1[1][k], e1[2][k]};
+      const double e2_[3] = {e2[0][k], e2[1][k], e2[2][k]};
+      const double ra_[3] = {ra[0][k], ra[1][k], ra[2][k]};
+      const TriangleTerms<double> t = triangle_terms(e1_, e2_, ra_, weight[q], area0[q], kal);
+      bad |= !(t.area > 0.0);
+      area[k] = t.area;
+      vol[k] = t.volume;
+      nx[q] = t.nx, ny[q] = t.ny, nz[q] = t.nz;
+      g[q] = t.g;
+      coef[q] = t.coef;
     }
     sums.add(area, vol, first, nb);
   }
@@ -1581,7 +1613,7 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   // the area forces along (T - p_i) on the vertices, T - p0 = (e1 + e2) / 3,
   // as vectors per triangle; the normals N summed per node (the volume
   // force and the node normal are along that sum)
-  const bool normal_sums = volume_factor != 0.0 || write_normals;
+  const bool normal_sums = global_ia.kv != 0.0 || write_normals; // as evaluate_batch
   for (int q = 0; q < n_tri; ++q) {
     const double cq = coef[q] + area_factor * g[q];
     const Lanes pa = x[v0[q]].v, e1 = x[v1[q]].v - pa, e2 = x[v2[q]].v - pa, m0 = (e1 + e2) * third;
@@ -1605,8 +1637,8 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
     const int *const eb = m_edge_b.data() + first, *const ea = m_edge_a.data() + first,
                      *const ec = m_edge_c.data() + first, *const ed = m_edge_d.data() + first;
     int k0 = 0;
-    for (; k0 + 4 <= nb; k0 += 4) { // four edges at a time (store_components)
-      Lanes e[4], u[4], w[4], dv[4];
+    for (; k0 + 4 <= nb; k0 += 4) {                 // four edges at a time (store_components)
+      Lanes e[4], u[4] = {}, w[4] = {}, dv[4] = {}; // (zeros: no "may be used uninitialised")
       for (int j = 0; j < 4; ++j) {
         const int k = k0 + j;
         const Lanes xb = x[eb[k]].v;
@@ -1678,9 +1710,10 @@ bool FusedMembranePlan::evaluate_cell(std::size_t cell, const OifLocalForces& lo
   if (write_normals) {
     const int* const index = m_index.data() + r.node_begin;
     for (int k = 0; k < n_nodes; ++k) {
-      const Vec3 sum(nsum[k].v[0], nsum[k].v[1], nsum[k].v[2]);
-      const double len = sum.norm();
-      p.normal[index[k]] = len > 0.0 ? Vec3(sign * sum / len) : Vec3(sign * sum);
+      const Lanes n = nsum[k].v;
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const double scale = len > 0.0 ? sign / len : sign;
+      p.normal[index[k]] = Vec3(n[0] * scale, n[1] * scale, n[2] * scale);
     }
   }
   return true;
@@ -1728,22 +1761,13 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
       e2[d] = c.c[d] - a.c[d];
       ra[d] = a.c[d] - origin.c[d];
     }
-    const BatchLanes nx = e1[1] * e2[2] - e1[2] * e2[1];
-    const BatchLanes ny = e1[2] * e2[0] - e1[0] * e2[2];
-    const BatchLanes nz = e1[0] * e2[1] - e1[1] * e2[0];
-    const BatchLanes area = 0.5 * sqrt_lanes(nx * nx + ny * ny + nz * nz);
-    bad |= ~(area > zero);
-    sums.add_one(q, area, ra[0] * nx + ra[1] * ny + ra[2] * nz);
-    const BatchLanes m0x = (e1[0] + e2[0]) * third, m0y = (e1[1] + e2[1]) * third,
-                     m0z = (e1[2] + e2[2]) * third;
-    const BatchLanes m1x = m0x - e1[0], m1y = m0y - e1[1], m1z = m0z - e1[2];
-    const BatchLanes m2x = m0x - e2[0], m2y = m0y - e2[1], m2z = m0z - e2[2];
-    const BatchLanes inv_norm2 = 1.0 / (m0x * m0x + m0y * m0y + m0z * m0z + m1x * m1x + m1y * m1y +
-                                        m1z * m1z + m2x * m2x + m2y * m2y + m2z * m2z);
-    g[q] = area * inv_norm2;
-    coef[q] = kal * (weight[q] * area - area0[q]) * inv_norm2;
+    const TriangleTerms<BatchLanes> t = triangle_terms(e1, e2, ra, weight[q], area0[q], kal);
+    bad |= ~(t.area > zero);
+    sums.add_one(q, t.area, t.volume);
+    g[q] = t.g;
+    coef[q] = t.coef;
     if (normal_sums) {
-      const BatchLanes n_[3] = {nx, ny, nz};
+      const BatchLanes n_[3] = {t.nx, t.ny, t.nz};
       for (int d = 0; d < 3; ++d) {
         nsum[v0[q]].c[d] += n_[d];
         nsum[v1[q]].c[d] += n_[d];
@@ -1782,10 +1806,10 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
                          m_edge_inv_r0.data() + first, m_edge_cos_psi0.data() + first,
                          m_edge_sin_psi0.data() + first, local_ia))
     return false;
-  // per node, as evaluate_cell: the volume force along the normal sum, a
-  // finite check, the normals straight into the particles (here as sum
-  // times sign / |sum|, one division for the four cells instead of three
-  // per cell: equal to evaluate_cell's within an ulp)
+  // per node, as evaluate_cell: the volume force along the normal sum, the
+  // normals (sum times sign / |sum|) straight into the particles, and a
+  // finite check (here after the normals: they are set, not added, and a
+  // declined pass has them all set again)
   const double largest = std::numeric_limits<double>::max();
   MaskOf<BatchLanes> finite = zero < splat<BatchLanes>(1.0);
   Vec3* cell_force[kBatchCells];
@@ -1811,9 +1835,7 @@ bool FusedMembranePlan::evaluate_batch(const Batch& batch, const OifLocalForces&
             Vec3(n[0][j] * scale[j], n[1][j] * scale[j], n[2][j] * scale[j]);
     }
   }
-  if (!(finite[0] & finite[1] & finite[2] & finite[3]))
-    return false;
-  return true;
+  return !any_lane(~finite);
 }
 
 void FusedMembranePlan::form_batches() {

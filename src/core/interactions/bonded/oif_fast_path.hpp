@@ -49,7 +49,7 @@
 //    cell (one mol_id, no other set with it), and for a cell wider than half
 //    the box. Cells with one copy of the tables (the cells of a type) go
 //    four at a time, one per vector lane (evaluate_batch: the same
-//    arithmetic, edge_terms<Lanes>, with plain vector loads and adds of the
+//    arithmetic, edge_terms<BatchLanes>, with plain vector loads and adds of the
 //    nodes' components); the rest of them (n mod 4) and cells of other
 //    tables one at a time, vectorised over their triangles and edges.
 // Forces are accumulated per slot and added to the particles only when the
