@@ -60,12 +60,14 @@ centroid_area_force(const double (&p0)[3], const double (&p1)[3], const double (
 /** Vectors of doubles (GCC/Clang vector extension: Lanes, BatchLanes):
  *  their comparisons give masks (-1 where true). */
 template <class V> using MaskOf = decltype(V{} > V{});
+template <class V> constexpr int lanes_of = static_cast<int>(sizeof(V) / sizeof(double));
 template <class M> inline bool any_lane(M m) {
   long long any = 0;
-  for (int j = 0; j < static_cast<int>(sizeof(M) / sizeof(long long)); ++j)
+  for (int j = 0; j < lanes_of<M>; ++j)
     any |= m[j];
   return any != 0;
 }
+/** x in every lane (T = double: x itself). */
 template <class V> inline V splat(double x) {
   return V{} + x;
 }
@@ -75,7 +77,7 @@ template <class V> inline V sqrt_lanes(V a) {
   if constexpr (sizeof(V) == 32)
     return reinterpret_cast<V>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(a)));
 #endif
-  for (int j = 0; j < static_cast<int>(sizeof(V) / sizeof(double)); ++j)
+  for (int j = 0; j < lanes_of<V>; ++j)
     a[j] = std::sqrt(a[j]);
   return a;
 }
@@ -88,11 +90,7 @@ template <class V> inline V sqrt_lanes(V a) {
  *  double or a vector of them. */
 template <class T> inline T atan_small(T t) {
   const T s = t * t;
-  T pz;
-  if constexpr (std::is_same_v<T, double>)
-    pz = 0.04599761088928747;
-  else
-    pz = splat<T>(0.04599761088928747);
+  T pz = splat<T>(0.04599761088928747);
   pz = pz * s - 0.06523656687585018;
   pz = pz * s + 0.07683492919828101;
   pz = pz * s - 0.09090589248444612;
@@ -352,6 +350,30 @@ triangle_terms(const T (&e1)[3], const T (&e2)[3], const T (&ra)[3], double weig
   return t;
 }
 
+/** Bending (eq. 4), F = -kb dphi grad phi (oif_bending.hpp): on the wings
+ *  A and D kb dphi l n / |n|^2 (fa = ca n1, fd = cd n2), the edge ends B and
+ *  C split by the wings' foot points ta, td along the edge. */
+template <class T> struct BendingFactors { T ca, cd, ta, td; };
+template <class T>
+__attribute__((always_inline)) inline BendingFactors<T>
+bending_factors(double kb, T dphi, T l, T inv_n1n2, T n1_2, T n2_2, T inv_l2, const T (&e)[3],
+                const T (&u)[3], const T (&w)[3]) {
+  const T c = kb * dphi * l * inv_n1n2;
+  return {c * n2_2, c * n1_2, (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * inv_l2,
+          (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) * inv_l2};
+}
+/** Component d of an edge's forces on A, B, C, D: stretching and viscosity
+ *  fe on B and -fe on C, the bending as above (n1, n2: the wings' normals'
+ *  component d). */
+template <class T>
+__attribute__((always_inline)) inline void
+edge_end_forces(T fe, T n1, T n2, const BendingFactors<T>& b, T& fa, T& fb, T& fc, T& fd) {
+  fa = b.ca * n1;
+  fd = b.cd * n2;
+  fb = fe - ((1.0 - b.ta) * fa + (1.0 - b.td) * fd);
+  fc = -fe - (b.ta * fa + b.td * fd);
+}
+
 /** -atan2(sine, cosine) in (-pi, pi], as the generic bending: the
  *  deviations that the polynomial (atan_small) does not cover. */
 inline double large_deviation(double sine, double cosine) {
@@ -423,28 +445,23 @@ bool edge_block_terms(EdgeBlock& blk, int nb, const double* r0, const double* in
   // split by the wings' foot points ta, td (oif_bending.hpp)
   PYOIF_INDEPENDENT_ITERATIONS
   for (int k = 0; k < nb; ++k) {
-    for (int d = 0; d < 3; ++d) {
-      const double fe = blk.coefficient[k] * blk.e[d][k];
-      blk.fb[d][k] = fe;
-      blk.fc[d][k] = -fe;
-      blk.fa[d][k] = 0.0;
-      blk.fd[d][k] = 0.0;
-    }
     if constexpr (bend) {
-      const double c = kb * blk.dphi[k] * blk.l[k] * blk.inv_n1n2[k];
-      const double ca = c * blk.n2_2[k], cd = c * blk.n1_2[k];
-      const double ta =
-          (blk.u[0][k] * blk.e[0][k] + blk.u[1][k] * blk.e[1][k] + blk.u[2][k] * blk.e[2][k]) *
-          blk.inv_l2[k];
-      const double td =
-          (blk.w[0][k] * blk.e[0][k] + blk.w[1][k] * blk.e[1][k] + blk.w[2][k] * blk.e[2][k]) *
-          blk.inv_l2[k];
+      const double e[3] = {blk.e[0][k], blk.e[1][k], blk.e[2][k]};
+      const double u[3] = {blk.u[0][k], blk.u[1][k], blk.u[2][k]};
+      const double w[3] = {blk.w[0][k], blk.w[1][k], blk.w[2][k]};
+      const BendingFactors<double> b =
+          bending_factors(kb, blk.dphi[k], blk.l[k], blk.inv_n1n2[k], blk.n1_2[k], blk.n2_2[k],
+                          blk.inv_l2[k], e, u, w);
+      for (int d = 0; d < 3; ++d)
+        edge_end_forces(blk.coefficient[k] * e[d], blk.n1[d][k], blk.n2[d][k], b, blk.fa[d][k],
+                        blk.fb[d][k], blk.fc[d][k], blk.fd[d][k]);
+    } else {
       for (int d = 0; d < 3; ++d) {
-        const double fa = ca * blk.n1[d][k], fd = cd * blk.n2[d][k];
-        blk.fa[d][k] = fa;
-        blk.fd[d][k] = fd;
-        blk.fb[d][k] -= (1.0 - ta) * fa + (1.0 - td) * fd;
-        blk.fc[d][k] -= ta * fa + td * fd;
+        const double fe = blk.coefficient[k] * blk.e[d][k];
+        blk.fb[d][k] = fe;
+        blk.fc[d][k] = -fe;
+        blk.fa[d][k] = 0.0;
+        blk.fd[d][k] = 0.0;
       }
     }
   }
@@ -511,7 +528,8 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
   // per edge of a block: e, the wing normals n1, n2 (bend), the stretching
   // coefficient and the bending factors
   struct alignas(sizeof(BatchLanes)) EdgeLanes {
-    BatchLanes e[3], n1[3], n2[3], coefficient, ca, cd, ta, td;
+    BatchLanes e[3], n1[3], n2[3], coefficient;
+    BendingFactors<BatchLanes> bending;
   };
   EdgeLanes blk[kBatchBlock];
   for (int first = 0; first < n_edges; first += kBatchBlock) {
@@ -539,13 +557,10 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       if constexpr (bend) {
         BatchLanes dphi = t.dphi;
         if (any_lane(~t.small)) // deviations beyond atan(1/4): the library's arctangent
-          for (int j = 0; j < static_cast<int>(sizeof(BatchLanes) / sizeof(double)); ++j)
+          for (int j = 0; j < lanes_of<BatchLanes>; ++j)
             if (!t.small[j])
               dphi[j] = large_deviation(t.sine[j], t.cosine[j]);
-        const BatchLanes c = kb * dphi * t.l * t.inv_n1n2;
-        out.ca = c * t.n2_2, out.cd = c * t.n1_2;
-        out.ta = (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * t.inv_l2;
-        out.td = (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) * t.inv_l2;
+        out.bending = bending_factors(kb, dphi, t.l, t.inv_n1n2, t.n1_2, t.n2_2, t.inv_l2, e, u, w);
         for (int d = 0; d < 3; ++d) {
           out.n1[d] = t.n1[d];
           out.n2[d] = t.n2[d];
@@ -560,10 +575,11 @@ bool batch_edge_terms(const Node* x, const Node* v, Node* f, const int* eb, cons
       if constexpr (bend) {
         Node &fa = f[ea[k]], &fd = f[ed[k]];
         for (int d = 0; d < 3; ++d) {
-          const BatchLanes fe = in.coefficient * in.e[d];
-          const BatchLanes fa_ = in.ca * in.n1[d], fd_ = in.cd * in.n2[d];
-          fb.c[d] += fe - ((1.0 - in.ta) * fa_ + (1.0 - in.td) * fd_);
-          fc.c[d] += -fe - (in.ta * fa_ + in.td * fd_);
+          BatchLanes fa_, fb_, fc_, fd_;
+          edge_end_forces(in.coefficient * in.e[d], in.n1[d], in.n2[d], in.bending, fa_, fb_, fc_,
+                          fd_);
+          fb.c[d] += fb_;
+          fc.c[d] += fc_;
           fa.c[d] += fa_;
           fd.c[d] += fd_;
         }
