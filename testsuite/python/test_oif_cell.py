@@ -103,6 +103,54 @@ class TestOifCell(unittest.TestCase):
         self.assertEqual(len(set(c1.mesh.part_ids) & set(c2.mesh.part_ids)), 0)
         self.assertEqual(len(self.system.part), 748)
 
+    def test_energies_per_cell(self):
+        """OifCell.get_energies(): each term near zero for a relaxed cell; for
+        a deformed one the volume and global-area terms equal kv/2 (V - V0)^2
+        / V0 and ka_g (S - S0)^2 / (4 S0) of that cell (doc/interactions.md,
+        rtol 1e-10), the other terms are positive; a modulus that is off
+        gives 0.0; the cells' totals add up to the bonded energy (rtol
+        1e-12), so no cell's energy is counted in another's."""
+        s = self.system
+        moduli = dict(ks=0.02, kb=0.01, kal=0.02, kag=0.7, kv=0.9)
+        full = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(R_RBC,) * 3, **moduli)
+        partial = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(R_RBC,) * 3, ks=0.02, kv=0.9)
+        relaxed = oif.OifCell(cell_type=full, particle_type=0, origin=[10, 8, 8])
+        rng = np.random.default_rng(5)
+        deformed = []
+        for ct, origin in ((full, [30, 8, 8]), (full, [10, 22, 22]), (partial, [30, 22, 22])):
+            cell = oif.OifCell(cell_type=ct, particle_type=0, origin=origin)
+            # stretched along x by 4 %, squeezed along y by 3 %, and rough
+            x = (cell.particles.pos - origin) * [1.04, 0.97, 1.0] + rng.normal(0, 0.02, (374, 3))
+            cell.particles.pos = x + origin
+            deformed.append(cell)
+        terms = ("stretching", "bending", "local_area", "global_area", "volume")
+        e = relaxed.get_energies()
+        self.assertEqual(set(e), set(terms) | {"total"})
+        scale = deformed[0].get_energies()["total"]
+        for term in terms:
+            self.assertLess(abs(e[term]), 1e-12 * scale, term)
+        total = e["total"]
+        for cell in deformed:
+            ct = cell.cell_type
+            e = cell.get_energies()
+            V, S = cell.volume(), cell.surface()
+            self.assertAlmostEqual(e["volume"], 0.45 * (V - ct.volume0) ** 2 / ct.volume0,
+                                   delta=1e-10 * e["volume"])
+            self.assertAlmostEqual(e["global_area"], ct.kag * (S - ct.surface0) ** 2 / (4 * ct.surface0),
+                                   delta=1e-10 * max(e["global_area"], 1e-300))
+            on = [t for t in terms if t in ("stretching", "volume")
+                  or ct is full]  # the partial type has ks and kv only
+            for term in terms:
+                if term in on:
+                    self.assertGreater(e[term], 0.0, term)
+                else:
+                    self.assertEqual(e[term], 0.0, term)
+            self.assertAlmostEqual(e["total"], sum(e[t] for t in terms), delta=1e-14 * e["total"])
+            total += e["total"]
+        # the two deformed cells of one type differ (different random parts)
+        self.assertNotEqual(deformed[0].get_energies()["bending"], deformed[1].get_energies()["bending"])
+        self.assertAlmostEqual(total, s.analysis.energy()["bonded"], delta=1e-12 * total)
+
     def test_motion(self):
         cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])
         cell.set_origin([20.0, 10.0, 5.0])

@@ -784,7 +784,7 @@ class OifCellType:
 class OifCell:
     """One cell: particles at the nodes of its type's mesh, with all bonds.
 
-    ``OifCell(cell_type, particle_type, origin, particle_mass=1.0,
+    ``OifCell(cell_type, origin, particle_type, particle_mass=1.0,
     rotate=None, exclusion_neighbours=True, self_cell_cutoff=None,
     rotation_ids=())``
 
@@ -1140,6 +1140,27 @@ class OifCell:
                 have = sel >= 0
                 f[have] = forces[sel[have]]
             out[term] = f
+        out["total"] = sum(out[t] for t, _ in self._FORCE_TERMS)
+        return out
+
+    def get_energies(self):
+        """dict term -> this cell's elastic energy at the current positions
+        (simulation units) for 'stretching' (eq. 3's neo-Hookean and linear
+        parts), 'bending' (eq. 4), 'local_area' (eq. 5), 'global_area' (eq.
+        6) and 'volume' (eq. 7), 0.0 where the modulus is off, and 'total'
+        (their sum). The membrane viscosity dissipates and has no energy.
+        Summed over all cells, the total is the bonded energy of
+        ``system.analysis.energy()`` when the cells have no other bonds."""
+        ct = self.cell_type
+        self.mesh._live_parts()  # a stale cell's mol_id could belong to another cell now
+        out = {term: 0.0 for term, _ in self._FORCE_TERMS}
+        for inter in (ct.local_force_interaction, ct.global_force_interaction):
+            if inter is None:
+                continue
+            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter))
+            for term, (mol_ids, values) in terms.items():
+                here = np.flatnonzero(np.asarray(mol_ids) == self.cell_id)
+                out[term] = float(np.asarray(values)[here].sum())
         out["total"] = sum(out[t] for t, _ in self._FORCE_TERMS)
         return out
 
