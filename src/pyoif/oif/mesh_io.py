@@ -25,19 +25,40 @@ DEGENERATE_AREA_TOLERANCE = 1e-10
 
 class MeshData:
     """Checked mesh: nodes (N x 3), triangles (M x 3, PyOIF orientation) and
-    where each came from (file names and line numbers, for messages)."""
+    where each came from, for messages: file names and line numbers for
+    PyOIF's text files; for files read through meshio (lines=False), the
+    triangle's place among the file's triangles and the point's index."""
 
     def __init__(self, nodes, triangles, nodes_file="<array>", triangles_file="<array>",
-                 node_lines=None, triangle_lines=None):
+                 node_lines=None, triangle_lines=None, lines=True):
         self.nodes = np.ascontiguousarray(nodes, dtype=float)
         self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
         self.nodes_file = nodes_file
         self.triangles_file = triangles_file
+        self.lines = lines
         self.node_lines = (np.arange(1, len(self.nodes) + 1) if node_lines is None
                            else np.asarray(node_lines))
         self.triangle_lines = (np.arange(1, len(self.triangles) + 1) if triangle_lines is None
                                else np.asarray(triangle_lines))
         self.flipped = np.zeros(len(self.triangles), dtype=bool)
+
+    def node_at(self, i):
+        """'file, line L' (or 'file, point i') of node i."""
+        if self.lines:
+            return _where(self.nodes_file, self.node_lines[i])
+        return f"{self.nodes_file}, point {int(i)} (counted from 0, coincident points merged)"
+
+    def triangle_at(self, t):
+        """'file, line L' (or 'file, triangle t') of triangle t."""
+        if self.lines:
+            return _where(self.triangles_file, self.triangle_lines[t])
+        return f"{self.triangles_file}, triangle {int(t)} (counted from 0 in the file's triangles)"
+
+    def triangles_named(self, ts):
+        """'line(s) L1, L2' (or 'triangle(s) t1, t2') of several triangles."""
+        if self.lines:
+            return "line(s) " + ", ".join(str(int(self.triangle_lines[t])) for t in ts)
+        return "triangle(s) " + ", ".join(str(int(t)) for t in ts)
 
 
 def _where(path, line):
@@ -213,9 +234,7 @@ def _read_with_meshio(path):
             new_index = np.cumsum(used_mask) - 1
             triangles = new_index[triangles]
             points = points[used_mask]
-    return MeshData(points, triangles, path, path,
-                    node_lines=np.zeros(len(points), dtype=int),
-                    triangle_lines=np.zeros(len(triangles), dtype=int))
+    return MeshData(points, triangles, path, path, lines=False)
 
 
 def edge_table(triangles):
@@ -239,26 +258,25 @@ def check_mesh(data, check_orientation=True):
     check_orientation, else only verify it."""
     nodes, tris = data.nodes, data.triangles
     nf, tf = data.nodes_file, data.triangles_file
-    nlines, tlines = data.node_lines, data.triangle_lines
     n = len(nodes)
     if len(tris) < 4:
         raise ValueError(f"mesh input: {tf} has {len(tris)} triangles; a closed surface needs at least 4")
     # indices in range
     bad = np.nonzero(np.any((tris < 0) | (tris >= n), axis=1))[0]
     if bad.size:
-        raise ValueError(f"{_where(tf, tlines[bad[0]])}: node index out of range 0..{n - 1} "
+        raise ValueError(f"{data.triangle_at(bad[0])}: node index out of range 0..{n - 1} "
                          f"({nf} has {n} nodes): {tris[bad[0]].tolist()}")
     # repeated node in a triangle
     bad = np.nonzero((tris[:, 0] == tris[:, 1]) | (tris[:, 1] == tris[:, 2]) | (tris[:, 0] == tris[:, 2]))[0]
     if bad.size:
-        raise ValueError(f"{_where(tf, tlines[bad[0]])}: degenerate triangle (a node repeated): "
+        raise ValueError(f"{data.triangle_at(bad[0])}: degenerate triangle (a node repeated): "
                          f"{tris[bad[0]].tolist()}")
     # unused nodes
     used = np.zeros(n, dtype=bool)
     used[tris.ravel()] = True
     bad = np.nonzero(~used)[0]
     if bad.size:
-        raise ValueError(f"{_where(nf, nlines[bad[0]])}: node {bad[0]} is not used by any triangle")
+        raise ValueError(f"{data.node_at(bad[0])}: node {bad[0]} is not used by any triangle")
     edges, he_edge = edge_table(tris)
     lengths = np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1)
     h = lengths.mean()
@@ -268,14 +286,14 @@ def check_mesh(data, check_orientation=True):
     close = np.nonzero(np.linalg.norm(np.diff(srt, axis=0), axis=1) <= DUPLICATE_NODE_TOLERANCE * h)[0]
     if close.size:
         i, j = sorted((order[close[0]], order[close[0] + 1]))
-        raise ValueError(f"{_where(nf, nlines[j])}: node {j} duplicates node {i} "
-                         f"({_where(nf, nlines[i])}) at {nodes[i].tolist()}")
+        raise ValueError(f"{data.node_at(j)}: node {j} duplicates node {i} "
+                         f"({data.node_at(i)}) at {nodes[i].tolist()}")
     # degenerate (zero-area) triangles
     a, b, c = nodes[tris[:, 0]], nodes[tris[:, 1]], nodes[tris[:, 2]]
     areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
     bad = np.nonzero(areas <= DEGENERATE_AREA_TOLERANCE * h * h)[0]
     if bad.size:
-        raise ValueError(f"{_where(tf, tlines[bad[0]])}: degenerate triangle (zero area, collinear "
+        raise ValueError(f"{data.triangle_at(bad[0])}: degenerate triangle (zero area, collinear "
                          f"nodes): {tris[bad[0]].tolist()}")
     # every edge in exactly two triangles
     counts = np.bincount(he_edge, minlength=len(edges))
@@ -285,9 +303,9 @@ def check_mesh(data, check_orientation=True):
         if bad_edges.size:
             e = bad_edges[0]
             hes = np.nonzero(he_edge == e)[0]
-            where = ", ".join(str(int(tlines[k // 3])) for k in hes)
-            raise ValueError(f"{_where(tf, tlines[hes[0] // 3])}: {kind}: edge {edges[e].tolist()} "
-                             f"(triangles on line(s) {where}); the mesh must be a closed surface")
+            raise ValueError(f"{data.triangle_at(hes[0] // 3)}: {kind}: edge {edges[e].tolist()} "
+                             f"(triangles on {data.triangles_named(hes // 3)}); the mesh must be a "
+                             f"closed surface")
     # duplicate triangles (same node set) are caught above as edges in >2 triangles,
     # except for a 2-triangle "pillow", excluded by len(tris) >= 4 and connectivity below.
     _check_vertex_fans(data, edges, he_edge)
@@ -297,7 +315,7 @@ def check_mesh(data, check_orientation=True):
 def _check_vertex_fans(data, edges, he_edge):
     """The triangles around each node must form a single fan (no two surface
     sheets touching at a node)."""
-    tris, tf, tlines = data.triangles, data.triangles_file, data.triangle_lines
+    tris = data.triangles
     n = len(data.nodes)
     # per node: number of incident triangles must equal number of incident edges
     # (for a closed manifold a node's link is a cycle with as many edges as vertices);
@@ -334,7 +352,7 @@ def _check_vertex_fans(data, edges, he_edge):
             t = t_next
         if len(seen) != tri_count[v]:
             missing = next(x for x in incident[v] if x not in seen)
-            raise ValueError(f"{_where(tf, tlines[missing])}: node {v} joins separate sheets of "
+            raise ValueError(f"{data.triangle_at(missing)}: node {v} joins separate sheets of "
                              f"surface (its triangles do not form one fan); the mesh must be a "
                              f"2-manifold")
 
@@ -343,7 +361,7 @@ def _orient(data, he_edge, fix):
     """Make orientation consistent across every edge (breadth-first over
     triangles), check there is one connected surface, and choose the global
     sign so that normals (B - A) x (C - A) point inward (PyOIF convention)."""
-    tris, tf, tlines = data.triangles, data.triangles_file, data.triangle_lines
+    tris = data.triangles
     m = len(tris)
     # neighbour across each half-edge
     partner = np.empty(3 * m, dtype=np.int64)
@@ -373,18 +391,18 @@ def _orient(data, he_edge, fix):
                 flip[u] = needs_flip
                 queue.append(u)
             elif flip[u] != needs_flip:
-                raise ValueError(f"{_where(tf, tlines[u])}: the surface is not orientable "
-                                 f"(Moebius-like); triangles on lines {tlines[t]} and {tlines[u]} "
+                raise ValueError(f"{data.triangle_at(u)}: the surface is not orientable "
+                                 f"(Moebius-like); triangles on {data.triangles_named([t, u])} "
                                  f"cannot be oriented consistently")
     if not visited.all():
         u = int(np.nonzero(~visited)[0][0])
-        raise ValueError(f"{_where(tf, tlines[u])}: the mesh has more than one connected surface "
-                         f"(this triangle is not connected to the one on line {tlines[0]})")
+        raise ValueError(f"{data.triangle_at(u)}: the mesh has more than one connected surface "
+                         f"(this triangle is not connected to the one on {data.triangles_named([0])})")
     if flip.any() and not fix:
         u = int(np.nonzero(flip)[0][0])
         if flip.sum() > m / 2:
             u = int(np.nonzero(~flip)[0][0])
-        raise ValueError(f"{_where(tf, tlines[u])}: triangle {tris[u].tolist()} is oriented "
+        raise ValueError(f"{data.triangle_at(u)}: triangle {tris[u].tolist()} is oriented "
                          f"opposite to its neighbours; pass check_orientation=True to fix it")
     new = tris.copy()
     new[flip] = new[flip][:, [0, 2, 1]]
