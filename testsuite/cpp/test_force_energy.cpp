@@ -123,10 +123,12 @@ Case cell_case(const std::string& name,
   c.name = name;
   c.length_scale = 2.0;
   c.random_config = [mesh](std::mt19937& rng) {
+    // stretched, rough, randomly rotated, and across the periodic face z = L
     Config x(mesh->nodes);
     const Vec3 stretch(1.0 + 0.2 * uniform(rng), 1.0 + 0.2 * uniform(rng), 1.0);
+    const Eigen::Matrix3d rotation = oif_test::random_rotation(rng);
     for (auto& xi : x)
-      xi = stretch.cwiseProduct(xi) + 0.15 * random_vec(rng) + Vec3(10, 10, 19.5); // across z = L
+      xi = rotation * (stretch.cwiseProduct(xi) + 0.15 * random_vec(rng)) + Vec3(10, 10, 19.5);
     return x;
   };
   c.energy = [sys](const Config& x) {
@@ -240,6 +242,11 @@ std::vector<Case> cases() {
     const int id = s.add_bonded_interaction(OifLocalForces{0.5, 0.2, 0, 0, 0});
     s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
   }));
+  out.push_back(
+      cell_case("oif_stretching_linear_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
+        const int id = s.add_bonded_interaction(OifLocalForces{0, 0.4, 0, 0, 0});
+        s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
+      }));
   // global area along the cell's dilation about its centroid
   auto cell_dilation = [](const Config& x) {
     Vec3 c = Vec3::Zero();
@@ -251,6 +258,17 @@ std::vector<Case> cases() {
       d[i] = x[i] - c;
     return std::vector<Config>{d};
   };
+  // local area of every triangle of the cell (each bond applies a third of
+  // eq. 5 to each of its two triangles) along the cell's dilation: that
+  // dilates every triangle about a moving point, and the centroid-allocated
+  // forces of a triangle do no work in a translation
+  out.push_back(cell_case(
+      "oif_local_area_cell",
+      [](pyoif::System& s, const oif_test::Mesh& m) {
+        const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0, 0.6, 0});
+        s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
+      },
+      cell_dilation));
   out.push_back(cell_case(
       "oif_global_area",
       [](pyoif::System& s, const oif_test::Mesh& m) {

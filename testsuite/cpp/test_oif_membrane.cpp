@@ -207,6 +207,25 @@ TEST(OifMembrane, ModuliMatchModelEquations) {
       centroid_term(f, t, k * (S - S0) * area(x[t[0]], x[t[1]], x[t[2]]) / S0);
     expected.push_back({"global_area", [&](System& s) { add_global(s, m, m.nodes, k, 0.0); }, f});
   }
+  // membrane viscosity (ESPResSo's variant B): per edge AB, on A
+  // kvisc ((v_B - v_A) . e) e, e = AB/|AB|, and the opposite on B
+  std::vector<Vec3> v(n);
+  for (auto& vi : v)
+    vi = Vec3(u(rng), u(rng), u(rng));
+  {
+    std::vector<Vec3> f(n, Vec3::Zero());
+    for (const auto& e : m.edges) {
+      const Vec3 unit = (x[e[1]] - x[e[0]]).normalized();
+      const Vec3 fa = k * (v[e[1]] - v[e[0]]).dot(unit) * unit;
+      f[e[0]] += fa;
+      f[e[1]] -= fa;
+    }
+    expected.push_back({"viscosity",
+                        [&](System& s) {
+                          add_local(s, m, m.nodes, OifLocalForces{0, 0, 0, 0, k});
+                        },
+                        f});
+  }
   for (const bool flip : {false, true}) { // eq. 7, outward (and inward) triangle order
     std::vector<Vec3> f(n, Vec3::Zero());
     for (const auto& t : m.triangles) {
@@ -219,9 +238,15 @@ TEST(OifMembrane, ModuliMatchModelEquations) {
   }
   for (const auto& e : expected) {
     auto s = oif_test::make_system();
-    oif_test::add_cell_particles(*s, x, 0);
+    oif_test::add_cell_particles(*s, x, 0, 0, &v); // velocities: only the viscosity uses them
     e.add(*s);
     const auto f = oif_test::forces_of(*s, n);
+    if (e.name == "viscosity") { // it damps: its power sum f.v = -kvisc sum (dv . e)^2 < 0
+      double power = 0.0;
+      for (std::size_t i = 0; i < n; ++i)
+        power += f[i].dot(v[i]);
+      EXPECT_LT(power, 0.0);
+    }
     double fmax = 0.0, err = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       fmax = std::max(fmax, e.f[i].norm());
