@@ -280,6 +280,38 @@ class Forces(unittest.TestCase):
         self.assertGreater(np.einsum("ij,ij->i", normals, radial @ rot.T).min(),
                            np.cos(np.radians(3)))
 
+    def test_collision_uses_current_normals(self):
+        """The upstream weakness: membrane_collision must see the normals of
+        the current positions, not those of the previous force calculation.
+        Cell B touches A; between two force calculations B is turned by 180
+        degrees about y. The second calculation must give the forces of a
+        fresh system in the turned configuration (atol 1e-15). With the
+        previous normals, B's nodes facing A would carry normals pointing
+        away from A, parallel to A's, and the contact would be silent."""
+        n = len(NODES)
+        a_pos = NODES + [10.0, 15, 15]
+
+        def build(b_pos):
+            s = new_system()
+            s.part.add(pos=a_pos, mol_id=0)
+            s.part.add(pos=b_pos, mol_id=1)
+            out = OifOutDirection()
+            s.bonded_inter.add(out)
+            s.part.add_bonds(out, np.vstack([TRIS, TRIS + n]))
+            s.non_bonded_inter[0, 0].membrane_collision.set_params(a=0.01, n=10.0, cutoff=0.5)
+            for _ in range(2):  # (twice: the normals of these positions exist either way)
+                s.integrator.run(0, recalc_forces=True)
+            return s
+
+        turned = NODES @ np.diag([-1.0, 1.0, -1.0]) + [15.9, 15, 15]
+        s = build(NODES + [15.9, 15, 15])
+        s.part.all().pos = np.vstack([a_pos, turned])
+        s.integrator.run(0, recalc_forces=True)
+        fresh = build(turned)
+        f = fresh.part.all().f
+        self.assertLess(f[:n].sum(axis=0)[0], -1e-4)  # the contact pushes A away from B
+        np.testing.assert_allclose(s.part.all().f, f, rtol=0, atol=1e-15)
+
     def test_membrane_collision_between_cells_of_one_type(self):
         """Two touching spheres of one particle type, told apart by mol_id: the
         contact pushes them apart (equal and opposite net forces); with both
