@@ -31,15 +31,22 @@ public:
     return x;
   }
   double allreduce_max(double x) const;
+  /** In-place maximum over ranks of a whole array, in one call. */
+  void allreduce_max(double* data, std::size_t n) const;
+  void allreduce_max(std::vector<double>& v) const { allreduce_max(v.data(), v.size()); }
   long allreduce_sum(long x) const;
   /** True on every rank when it is true on any rank (for error agreement). */
   bool any(bool flag) const;
+  /** Collective calls made over more than one rank so far (tests count the
+   *  reductions per step with it). */
+  std::size_t collectives() const { return m_collectives; }
 
 private:
   void query();
   MPI_Comm m_comm = MPI_COMM_WORLD;
   int m_rank = 0;
   int m_size = 1;
+  mutable std::size_t m_collectives = 0;
 };
 
 }  // namespace pyoif

@@ -92,6 +92,20 @@ void System::add_bonded_forces(Energies* e) {
     for (std::size_t i = 0; i < n_groups; ++i)
       m_fast_plans[i].write_normals = normals_target[i] > static_cast<int>(i);
   }
+  // Outside the fast path (several ranks, energies): the cell sums of every
+  // OifGlobalForces group first, all cell types together, so that a parallel
+  // run makes one reduction per step for all cells instead of one per type.
+  std::vector<char> summed(n_groups, 0);
+  if (!fast) {
+    std::vector<std::pair<const BondGroup*, oif::CellSums*>> jobs;
+    for (std::size_t i = 0; i < n_groups; ++i)
+      if (auto* global = std::get_if<OifGlobalForces>(&bonded[i].interaction)) {
+        jobs.emplace_back(&bonded[i].bonds, &global->sums);
+        summed[i] = 1;
+      }
+    if (!jobs.empty())
+      oif::CellSums::compute_all(jobs, p, box, comm);
+  }
   for (std::size_t bond_id = 0; bond_id < n_groups; ++bond_id) {
     if (fast && evaluated[bond_id])
       continue;
@@ -107,7 +121,8 @@ void System::add_bonded_forces(Energies* e) {
               normals_written[bond_id] = m_fast_plans[bond_id].normals_written();
               return;
             }
-          prepare_bonds(ia, entry.bonds, p, box, comm);
+          if (!summed[bond_id]) // (an OifGlobalForces group's prepare() is its sums)
+            prepare_bonds(ia, entry.bonds, p, box, comm);
           double energy_sum = 0.0;
           for_each_bond(
               ia, entry.bonds, p, box, time,

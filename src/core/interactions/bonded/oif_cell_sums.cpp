@@ -11,6 +11,7 @@
 namespace pyoif::oif {
 
 namespace {
+
 int local_index(const ParticleStore& p, int pid) {
   const int i = p.index(pid);
   if (i < 0)
@@ -18,45 +19,32 @@ int local_index(const ParticleStore& p, int pid) {
                                 ", which does not exist");
   return i;
 }
-} // namespace
 
-void CellSums::compute(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
-                       const Communicator& comm) {
-  const std::size_t n = group.size();
-  // The cells' mol_id range, agreed by all ranks so every rank uses the same
-  // dense slot table for the reduction.
+/** The mol_id range [lo, hi] of a group's local triangles (lo > hi: none). */
+std::pair<int, int> local_mol_range(const BondGroup& group, const ParticleStore& p) {
   int lo = INT_MAX, hi = INT_MIN;
-  for (std::size_t b = 0; b < n; ++b) {
+  for (std::size_t b = 0; b < group.size(); ++b) {
     const int mol = p.mol_id[local_index(p, group.bond(b)[0])];
     lo = std::min(lo, mol);
     hi = std::max(hi, mol);
   }
-  if (comm.size() > 1) {
-    const double glo = -comm.allreduce_max(n ? -static_cast<double>(lo) : -1e18);
-    const double ghi = comm.allreduce_max(n ? static_cast<double>(hi) : -1e18);
-    if (ghi < glo) { // no triangles on any rank
-      lo = 0;
-      hi = -1;
-    } else {
-      lo = static_cast<int>(glo);
-      hi = static_cast<int>(ghi);
-    }
-  }
-  mol_ids.clear();
+  return {lo, hi};
+}
+
+} // namespace
+
+void CellSums::accumulate(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
+                          bool partial, double* sums) {
+  const std::size_t n = group.size();
+  const long range = m_range_size;
   bond_cell.assign(n, -1);
-  m_min_mol = lo;
-  const long range = (hi >= lo) ? static_cast<long>(hi) - lo + 1 : 0;
-  if (range > 16 * static_cast<long>(n) + 4096 && comm.size() == 1)
-    throw InputError("OIF cells: mol_id values span " + std::to_string(range) + " numbers for " +
-                     std::to_string(n) + " triangles; number the cells (mol_id) compactly");
-  // dense per-mol arrays: [area | volume | triangles], reduced in ONE call
-  std::vector<double> sums(3 * static_cast<std::size_t>(range), 0.0);
   std::vector<Vec3> reference(static_cast<std::size_t>(range));
+  std::vector<Vec3> normal_sum(partial ? static_cast<std::size_t>(range) : 0, Vec3::Zero());
   std::vector<char> has_reference(static_cast<std::size_t>(range), 0);
   for (std::size_t b = 0; b < n; ++b) {
     const int* ids = group.bond(b);
     const int i0 = local_index(p, ids[0]);
-    const long k = static_cast<long>(p.mol_id[i0]) - lo;
+    const long k = static_cast<long>(p.mol_id[i0]) - m_range_lo;
     bond_cell[b] = static_cast<int>(k);
     // unfolded coordinates (position + image count): continuous along the
     // trajectory, so exact for a cell of any size, and no minimum-image
@@ -73,10 +61,28 @@ void CellSums::compute(const BondGroup& group, const ParticleStore& p, const Box
     sums[k] += triangle_area(a, bb, c);
     sums[range + k] += tetra_volume(a, bb, c);
     sums[2 * range + k] += 1.0;
+    if (partial)
+      normal_sum[k] += (bb - a).cross(c - a);
   }
-  comm.allreduce_sum(sums);
-  // compact slots: only cells that have triangles
+  // Part of a cell's triangles (the rest are on other ranks): the tetrahedra
+  // above point at this rank's reference r, the other ranks' at theirs. With
+  // S = sum (b - a) x (c - a) of these triangles, the same tetrahedra
+  // pointing at the origin sum to V_r + r . S / 6, which adds up over ranks
+  // (for the whole closed mesh S = 0 and any r gives the same volume). Its
+  // round-off is eps |r| |S|, against eps |r|^3 per triangle if every
+  // tetrahedron pointed at the origin.
+  if (partial)
+    for (long k = 0; k < range; ++k)
+      if (has_reference[k])
+        sums[range + k] += reference[k].dot(normal_sum[k]) / 6.0;
+}
+
+void CellSums::finish(const double* sums) {
+  const long range = m_range_size;
+  // compact slots: only cells that have triangles (on some rank)
+  m_min_mol = m_range_lo;
   m_slot_of_mol.assign(static_cast<std::size_t>(range), -1);
+  mol_ids.clear();
   area.clear();
   volume.clear();
   n_triangles.clear();
@@ -84,13 +90,92 @@ void CellSums::compute(const BondGroup& group, const ParticleStore& p, const Box
     if (sums[2 * range + k] == 0.0)
       continue;
     m_slot_of_mol[k] = static_cast<int>(mol_ids.size());
-    mol_ids.push_back(static_cast<int>(lo + k));
+    mol_ids.push_back(static_cast<int>(m_range_lo + k));
     area.push_back(sums[k]);
     volume.push_back(sums[range + k]);
     n_triangles.push_back(sums[2 * range + k]);
   }
   for (auto& s : bond_cell)
     s = m_slot_of_mol[s];
+}
+
+void CellSums::compute(const BondGroup& group, const ParticleStore& p, const BoxGeometry& box,
+                       const Communicator& comm) {
+  compute_all({{&group, this}}, p, box, comm);
+}
+
+void CellSums::compute_all(const std::vector<std::pair<const BondGroup*, CellSums*>>& jobs,
+                           const ParticleStore& p, const BoxGeometry& box,
+                           const Communicator& comm) {
+  const std::size_t n_jobs = jobs.size();
+  std::vector<std::pair<int, int>> local(n_jobs);
+  for (std::size_t j = 0; j < n_jobs; ++j)
+    local[j] = local_mol_range(*jobs[j].first, p);
+  const bool parallel = comm.size() > 1;
+  if (!parallel) {
+    // one rank: the range of this call's own triangles, no agreement needed
+    for (std::size_t j = 0; j < n_jobs; ++j) {
+      const auto [lo, hi] = local[j];
+      CellSums& s = *jobs[j].second;
+      const std::size_t n = jobs[j].first->size();
+      s.m_range_lo = hi >= lo ? lo : 0;
+      s.m_range_size = hi >= lo ? static_cast<long>(hi) - lo + 1 : 0;
+      if (s.m_range_size > 16 * static_cast<long>(n) + 4096)
+        throw InputError("OIF cells: mol_id values span " + std::to_string(s.m_range_size) +
+                         " numbers for " + std::to_string(n) +
+                         " triangles; number the cells (mol_id) compactly");
+    }
+  }
+  // Every rank lays out all groups' sums, [area | volume | triangles] per
+  // mol_id of the group's agreed range, in one array, plus a count of the
+  // triangles whose mol_id lies outside those ranges; reduced in ONE call.
+  // The ranges are agreed by all ranks and kept from call to call, so the
+  // steady state is one reduction per step for all cells together; only
+  // when a rank finds a mol_id outside them (cells added) is a second
+  // reduction needed, to agree on new ranges, and the sums are redone.
+  auto offsets = [&] {
+    std::vector<std::size_t> off(n_jobs + 1, 0);
+    for (std::size_t j = 0; j < n_jobs; ++j)
+      off[j + 1] = off[j] + 3 * static_cast<std::size_t>(jobs[j].second->m_range_size);
+    return off;
+  };
+  auto fits = [&](std::size_t j) {
+    const CellSums& s = *jobs[j].second;
+    const auto [lo, hi] = local[j];
+    return hi < lo || (lo >= s.m_range_lo && static_cast<long>(hi) - s.m_range_lo < s.m_range_size);
+  };
+  std::vector<double> sums;
+  auto sum_all = [&] {
+    const auto off = offsets();
+    sums.assign(off[n_jobs] + 1, 0.0);
+    for (std::size_t j = 0; j < n_jobs; ++j) {
+      if (fits(j))
+        jobs[j].second->accumulate(*jobs[j].first, p, box, parallel, sums.data() + off[j]);
+      else
+        sums[off[n_jobs]] += 1.0;
+    }
+    comm.allreduce_sum(sums);
+    return sums[off[n_jobs]] == 0.0; // the same verdict on every rank
+  };
+  if (!sum_all()) {
+    std::vector<double> bounds(2 * n_jobs); // (-lo, hi) per group, maximised over ranks
+    for (std::size_t j = 0; j < n_jobs; ++j) {
+      const auto [lo, hi] = local[j];
+      bounds[2 * j] = hi >= lo ? -static_cast<double>(lo) : -1e18;
+      bounds[2 * j + 1] = hi >= lo ? static_cast<double>(hi) : -1e18;
+    }
+    comm.allreduce_max(bounds);
+    for (std::size_t j = 0; j < n_jobs; ++j) {
+      const double lo = -bounds[2 * j], hi = bounds[2 * j + 1];
+      CellSums& s = *jobs[j].second;
+      s.m_range_lo = hi >= lo ? static_cast<int>(lo) : 0;
+      s.m_range_size = hi >= lo ? static_cast<long>(hi - lo) + 1 : 0;
+    }
+    sum_all(); // every mol_id fits now
+  }
+  const auto off = offsets();
+  for (std::size_t j = 0; j < n_jobs; ++j)
+    jobs[j].second->finish(sums.data() + off[j]);
 }
 
 } // namespace pyoif::oif
