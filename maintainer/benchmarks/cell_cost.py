@@ -3,8 +3,8 @@
 RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
 0 / 5 / 20 / 60 cells on one core, and the time to create one cell.
 
-    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--steps 200] [--repeats 5] [--cells 0 5 20 60]
-        [--csv cell_cost.csv] [--no-fluid] [--chunk 10 --rounds 60]
+    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--cells 0 5 20 60] [--chunk 10 --rounds 60]
+        [--csv cell_cost.csv] [--no-fluid] [--chunk 0 --steps 200 --repeats 5]
 
 Scene (as the ESPResSo 4.2.2 timing in reference/model.md): channel
 100 x 40 x 20 (agrid 1, tau = time step = 0.1, visc 1.5, dens 1) between two
@@ -14,6 +14,15 @@ collision (normals on), cells seeded at random without overlaps.
 Paper (PyOIF on ESPResSo, Threadripper, 1 core): 1.5-3.2 s extra per cell
 per 1000 steps; ESPResSo 4.2.2 on this machine kind: 0.77-1.59 ms per step
 per cell (5-20 cells). Target: <= 0.1 s per cell per 1000 steps.
+
+By default the configurations run in turn in short runs of 10 steps, 60
+rounds, and the quietest quarter of each one's runs is averaged (wall clock;
+steady on a shared machine whose speed drifts within seconds). --chunk 0
+takes instead the best CPU time of --repeats runs of --steps steps.
+The time of the fluid alone is the gauge of how loaded the machine was: the
+extra time per cell grows with it (other jobs compete for the shared cache
+that the coupling's reads of the fluid wait on), so the benchmark also
+prints the cost per cell as a share of the fluid-alone time.
 
 The same scene without fluid (--no-fluid: Langevin thermostat instead of
 LB) isolates the membrane and contact cost. Where the extra time goes is
@@ -137,15 +146,15 @@ def creation_time(repeats=20):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--steps", type=int, default=200, help="MD steps per timed run")
+    ap.add_argument("--steps", type=int, default=200, help="with --chunk 0: MD steps per timed run")
     ap.add_argument("--repeats", type=int, default=5,
-                    help="rounds: timed runs per configuration, taken in turns (best counts)")
+                    help="with --chunk 0: timed runs per configuration, taken in turns (best counts)")
     ap.add_argument("--cells", type=int, nargs="+", default=[0, 5, 20, 60])
     ap.add_argument("--no-fluid", action="store_true", help="Langevin instead of LB (membrane cost alone)")
-    ap.add_argument("--chunk", type=int, default=0,
-                    help="instead of the best of --repeats runs of --steps: runs of CHUNK steps (e.g. 10), the "
-                         "configurations in turn for --rounds rounds, the quietest quarter averaged (wall "
-                         "clock; steadier on a busy shared machine)")
+    ap.add_argument("--chunk", type=int, default=10,
+                    help="runs of CHUNK steps, the configurations in turn for --rounds rounds, the quietest "
+                         "quarter averaged (wall clock; steady on a busy shared machine); 0: the best CPU "
+                         "time of --repeats runs of --steps steps instead")
     ap.add_argument("--rounds", type=int, default=60, help="rounds of --chunk runs")
     ap.add_argument("--csv", default="cell_cost.csv")
     args = ap.parse_args()
@@ -170,8 +179,10 @@ def main():
                "extra_s_per_cell_per_1000_steps": extra, "wall_s_per_1000_steps": wall1000}
         row.update({f"{key}_s_per_1000_steps": phases[key] for key in PHASES})
         rows.append(row)
+        share = f", {100.0 * extra / base:.1f} % of the fluid alone" if (n and base and not args.no_fluid) else ""
         print(f"{n:3d} cells: {s1000:8.3f} {unit} / 1000 steps (wall {wall1000:.3f} s)"
-              + (f", extra per cell {extra:.4f} {unit} / 1000 steps ({extra:.4f} ms per step)" if n else ""))
+              + (f", extra per cell {extra:.4f} {unit} / 1000 steps ({extra:.4f} ms per step){share}" if n else
+                 " (the gauge of the machine's load: the less, the quieter)" if not args.no_fluid else ""))
         if n and base_phases is not None:  # where the extra time goes (wall clock, same run)
             print("           per cell by phase (wall s / 1000 steps): " + ", ".join(
                 f"{key} {(phases[key] - base_phases[key]) / n:.4f}" for key in PHASES))
