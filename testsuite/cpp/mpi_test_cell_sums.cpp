@@ -101,6 +101,25 @@ TEST(CellSumsMpi, OneReductionForAllCellTypes) {
   check(1, "the step after");
 }
 
+// A particle of a triangle missing on one rank only (a decomposition's
+// rank-local event): every rank throws, none waits in a reduction for it.
+TEST(CellSumsMpi, MissingParticleThrowsOnEveryRank) {
+  const Communicator world(MPI_COMM_WORLD);
+  ASSERT_GE(world.size(), 2) << "run under mpiexec -np 2";
+  const auto mesh = oif_test::icosphere(1, 2.0);
+  auto system = oif_test::make_system(50.0);
+  oif_test::add_cell_particles(*system, mesh.nodes, 0);
+  BondGroup all = triangles_of(mesh, {0});
+  oif::CellSums sums;
+  oif::CellSums::compute_all({{&all, &sums}}, system->particles, system->box, world);
+  if (world.rank() == 1)
+    system->remove_particle(5);
+  EXPECT_THROW(oif::CellSums::compute_all({{&all, &sums}}, system->particles, system->box, world),
+               SimulationInstability);
+  // and the ranks still agree afterwards: one more collective goes through
+  EXPECT_TRUE(world.any(world.rank() == 0));
+}
+
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   ::testing::InitGoogleTest(&argc, argv);

@@ -12,12 +12,26 @@ namespace pyoif::oif {
 
 namespace {
 
+[[noreturn]] void missing_particle(int pid) {
+  throw SimulationInstability("OIF triangle bond refers to particle " + std::to_string(pid) +
+                              ", which does not exist");
+}
+
 int local_index(const ParticleStore& p, int pid) {
   const int i = p.index(pid);
   if (i < 0)
-    throw SimulationInstability("OIF triangle bond refers to particle " + std::to_string(pid) +
-                                ", which does not exist");
+    missing_particle(pid);
   return i;
+}
+
+/** The first particle id of the groups' bonds that this rank lacks, -1 if none. */
+int first_missing(const std::vector<std::pair<const BondGroup*, CellSums*>>& jobs,
+                  const ParticleStore& p) {
+  for (const auto& job : jobs)
+    for (const int id : job.first->ids)
+      if (p.index(id) < 0)
+        return id;
+  return -1;
 }
 
 /** The mol_id range [lo, hi] of a group's local triangles (lo > hi: none). */
@@ -108,10 +122,14 @@ void CellSums::compute_all(const std::vector<std::pair<const BondGroup*, CellSum
                            const ParticleStore& p, const BoxGeometry& box,
                            const Communicator& comm) {
   const std::size_t n_jobs = jobs.size();
-  std::vector<std::pair<int, int>> local(n_jobs);
-  for (std::size_t j = 0; j < n_jobs; ++j)
-    local[j] = local_mol_range(*jobs[j].first, p);
   const bool parallel = comm.size() > 1;
+  // A missing particle is found on one rank; the others must not wait in a
+  // reduction for it: its count travels in the reduction, and every rank throws.
+  const int missing = parallel ? first_missing(jobs, p) : -1;
+  std::vector<std::pair<int, int>> local(n_jobs, {INT_MAX, INT_MIN});
+  if (missing < 0)
+    for (std::size_t j = 0; j < n_jobs; ++j)
+      local[j] = local_mol_range(*jobs[j].first, p);
   if (!parallel) {
     // one rank: the range of this call's own triangles, no agreement needed
     for (std::size_t j = 0; j < n_jobs; ++j) {
@@ -128,7 +146,8 @@ void CellSums::compute_all(const std::vector<std::pair<const BondGroup*, CellSum
   }
   // Every rank lays out all groups' sums, [area | volume | triangles] per
   // mol_id of the group's agreed range, in one array, plus a count of the
-  // triangles whose mol_id lies outside those ranges; reduced in ONE call.
+  // groups with a mol_id outside those ranges and one of missing particles;
+  // reduced in ONE call.
   // The ranges are agreed by all ranks and kept from call to call, so the
   // steady state is one reduction per step for all cells together; only
   // when a rank finds a mol_id outside them (cells added) is a second
@@ -147,15 +166,27 @@ void CellSums::compute_all(const std::vector<std::pair<const BondGroup*, CellSum
   std::vector<double> sums;
   auto sum_all = [&] {
     const auto off = offsets();
-    sums.assign(off[n_jobs] + 1, 0.0);
+    const std::size_t outside = off[n_jobs], lacking = off[n_jobs] + 1;
+    sums.assign(off[n_jobs] + 2, 0.0);
     for (std::size_t j = 0; j < n_jobs; ++j) {
+      if (missing >= 0)
+        continue;
       if (fits(j))
         jobs[j].second->accumulate(*jobs[j].first, p, box, parallel, sums.data() + off[j]);
       else
-        sums[off[n_jobs]] += 1.0;
+        sums[outside] += 1.0;
     }
+    if (missing >= 0)
+      sums[lacking] = 1.0;
     comm.allreduce_sum(sums);
-    return sums[off[n_jobs]] == 0.0; // the same verdict on every rank
+    // the same verdicts on every rank
+    if (sums[lacking] > 0.0) {
+      if (missing >= 0)
+        missing_particle(missing);
+      throw SimulationInstability("OIF triangle bond refers to a particle that does not exist "
+                                  "(found on another rank)");
+    }
+    return sums[outside] == 0.0;
   };
   if (!sum_all()) {
     std::vector<double> bounds(2 * n_jobs); // (-lo, hi) per group, maximised over ranks
