@@ -276,12 +276,14 @@ class TestMeshInput(unittest.TestCase):
     def test_meshio_errors_name_the_triangle(self):
         """Files read through meshio have no line per triangle: a bad mesh is
         located by the triangle's place among the file's triangles (counted
-        from 0), not by a line number (before: every one was 'line 0')."""
+        from 0), not by a line number (before: every one was 'line 0'), and
+        nodes are named by the file's point indices, also where points were
+        dropped (here an unused point 0 shifts every index by one)."""
         nodes, tris = octahedron()
         path = os.path.join(self.tmp.name, "open.off")
         with open(path, "w") as f:  # the octahedron without its triangle 5: open edges
-            f.write("OFF\n6 7 0\n" + "".join(f"{p[0]} {p[1]} {p[2]}\n" for p in nodes))
-            f.write("".join(f"3 {a} {b} {c}\n" for k, (a, b, c) in enumerate(tris) if k != 5))
+            f.write("OFF\n7 7 0\n9 9 9\n" + "".join(f"{p[0]} {p[1]} {p[2]}\n" for p in nodes))
+            f.write("".join(f"3 {a + 1} {b + 1} {c + 1}\n" for k, (a, b, c) in enumerate(tris) if k != 5))
         with self.assertRaises(ValueError) as cm:
             self.cell_type(path, "")
         msg = str(cm.exception)
@@ -289,10 +291,10 @@ class TestMeshInput(unittest.TestCase):
         # the open edges are those of the missing triangle; the first one named
         # lies in a triangle that shares it, and that triangle is listed
         k = int(re.search(r"open[.]off, triangle ([0-9]+) \(counted from 0", msg).group(1))
-        kept = [t for j, t in enumerate(tris) if j != 5]
+        kept = [[v + 1 for v in t] for j, t in enumerate(tris) if j != 5]
         edge = [int(v) for v in re.search(r"edge \[([0-9]+), ([0-9]+)\]", msg).groups()]
-        self.assertTrue(set(edge) <= set(kept[k]) and set(edge) <= set(tris[5]), msg)
-        self.assertIn(f"(triangles on triangle(s) {k})", msg)
+        self.assertTrue(set(edge) <= set(kept[k]) and set(edge) <= {v + 1 for v in tris[5]}, msg)
+        self.assertIn(f"(the file's triangle(s) {k})", msg)
 
     def test_from_arrays_checks(self):
         nodes, tris = octahedron()

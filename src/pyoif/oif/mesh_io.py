@@ -43,22 +43,33 @@ class MeshData:
         self.flipped = np.zeros(len(self.triangles), dtype=bool)
 
     def node_at(self, i):
-        """'file, line L' (or 'file, point i') of node i."""
+        """'file, line L' (or 'file, point k (counted from 0)') of node i."""
+        return f"{self.nodes_file}, {self.node_ref(i)}" + ("" if self.lines else " (counted from 0)")
+
+    def node_ref(self, i):
+        """'line L' (or 'point k', the file's point index) of node i."""
+        return f"line {int(self.node_lines[i])}" if self.lines else f"point {int(self.node_lines[i])}"
+
+    def ids(self, nodes):
+        """Node numbers as the file gives them: the mesh's own for PyOIF's
+        files, the file's point indices for meshio inputs (whose coincident
+        points are merged and unused ones dropped)."""
         if self.lines:
-            return _where(self.nodes_file, self.node_lines[i])
-        return f"{self.nodes_file}, point {int(i)} (counted from 0, coincident points merged)"
+            return np.asarray(nodes).tolist()
+        return np.asarray(self.node_lines)[np.asarray(nodes)].tolist()
 
     def triangle_at(self, t):
-        """'file, line L' (or 'file, triangle t') of triangle t."""
+        """'file, line L' (or 'file, triangle t (counted from 0 ...)') of triangle t."""
         if self.lines:
             return _where(self.triangles_file, self.triangle_lines[t])
-        return f"{self.triangles_file}, triangle {int(t)} (counted from 0 in the file's triangles)"
+        return f"{self.triangles_file}, triangle {int(t)} (counted from 0 among the file's triangles)"
 
     def triangles_named(self, ts):
-        """'line(s) L1, L2' (or 'triangle(s) t1, t2') of several triangles."""
+        """'the triangles on line(s) L1, L2' (or 'the file's triangle(s) t1,
+        t2') of several triangles."""
         if self.lines:
-            return "line(s) " + ", ".join(str(int(self.triangle_lines[t])) for t in ts)
-        return "triangle(s) " + ", ".join(str(int(t)) for t in ts)
+            return "the triangles on line(s) " + ", ".join(str(int(self.triangle_lines[t])) for t in ts)
+        return "the file's triangle(s) " + ", ".join(str(int(t)) for t in ts)
 
 
 def _where(path, line):
@@ -203,12 +214,14 @@ def _read_with_meshio(path):
     if not tris:
         raise ValueError(f"mesh input: '{path}' contains no triangles")
     points = np.asarray(m.points, dtype=float)
+    before = 0  # triangles in the blocks before this one
     for block in tris:  # numpy would take -1 as the last node, and fail on too large ones
         out = (block < 0) | (block >= len(points))
         if np.any(out):
-            row = int(np.nonzero(out.any(axis=1))[0][0])
-            raise ValueError(f"mesh input: '{path}': triangle {row} {block[row].tolist()} refers to a node "
-                             f"outside 0..{len(points) - 1}")
+            row = int(np.nonzero(out.any(axis=1))[0][0]) + before
+            raise ValueError(f"mesh input: '{path}': triangle {row} (counted from 0 among the file's triangles) "
+                             f"{block[row - before].tolist()} refers to a node outside 0..{len(points) - 1}")
+        before += len(block)
     if points.shape[1] == 2:
         points = np.hstack([points, np.zeros((len(points), 1))])
     bad = np.nonzero(~np.all(np.isfinite(points), axis=1))[0]
@@ -222,19 +235,22 @@ def _read_with_meshio(path):
     _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.ravel()
     used = np.unique(triangles)
+    file_index = np.arange(len(points))  # per node: its point index in the file
     if len(first) != len(points) or len(used) != len(points):
         order = np.sort(first)
         remap = np.empty(len(first), dtype=np.int64)
         remap[np.argsort(first)] = np.arange(len(first))
         triangles = remap[inverse[triangles]]
         points = points[order]
+        file_index = order
         used_mask = np.zeros(len(points), dtype=bool)
         used_mask[triangles.ravel()] = True
         if not used_mask.all():  # drop points no triangle uses (e.g. Gmsh geometry points)
             new_index = np.cumsum(used_mask) - 1
             triangles = new_index[triangles]
             points = points[used_mask]
-    return MeshData(points, triangles, path, path, lines=False)
+            file_index = file_index[used_mask]
+    return MeshData(points, triangles, path, path, node_lines=file_index, lines=False)
 
 
 def edge_table(triangles):
@@ -270,13 +286,13 @@ def check_mesh(data, check_orientation=True):
     bad = np.nonzero((tris[:, 0] == tris[:, 1]) | (tris[:, 1] == tris[:, 2]) | (tris[:, 0] == tris[:, 2]))[0]
     if bad.size:
         raise ValueError(f"{data.triangle_at(bad[0])}: degenerate triangle (a node repeated): "
-                         f"{tris[bad[0]].tolist()}")
+                         f"{data.ids(tris[bad[0]])}")
     # unused nodes
     used = np.zeros(n, dtype=bool)
     used[tris.ravel()] = True
     bad = np.nonzero(~used)[0]
     if bad.size:
-        raise ValueError(f"{data.node_at(bad[0])}: node {bad[0]} is not used by any triangle")
+        raise ValueError(f"{data.node_at(bad[0])}: node {data.ids(bad[0])} is not used by any triangle")
     edges, he_edge = edge_table(tris)
     lengths = np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1)
     h = lengths.mean()
@@ -286,15 +302,15 @@ def check_mesh(data, check_orientation=True):
     close = np.nonzero(np.linalg.norm(np.diff(srt, axis=0), axis=1) <= DUPLICATE_NODE_TOLERANCE * h)[0]
     if close.size:
         i, j = sorted((order[close[0]], order[close[0] + 1]))
-        raise ValueError(f"{data.node_at(j)}: node {j} duplicates node {i} "
-                         f"({data.node_at(i)}) at {nodes[i].tolist()}")
+        raise ValueError(f"{data.node_at(j)}: node {data.ids(j)} duplicates node {data.ids(i)} "
+                         f"({data.node_ref(i)}) at {nodes[i].tolist()}")
     # degenerate (zero-area) triangles
     a, b, c = nodes[tris[:, 0]], nodes[tris[:, 1]], nodes[tris[:, 2]]
     areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
     bad = np.nonzero(areas <= DEGENERATE_AREA_TOLERANCE * h * h)[0]
     if bad.size:
         raise ValueError(f"{data.triangle_at(bad[0])}: degenerate triangle (zero area, collinear "
-                         f"nodes): {tris[bad[0]].tolist()}")
+                         f"nodes): {data.ids(tris[bad[0]])}")
     # every edge in exactly two triangles
     counts = np.bincount(he_edge, minlength=len(edges))
     for kind, mask in (("an edge shared by more than two triangles", counts > 2),
@@ -303,9 +319,8 @@ def check_mesh(data, check_orientation=True):
         if bad_edges.size:
             e = bad_edges[0]
             hes = np.nonzero(he_edge == e)[0]
-            raise ValueError(f"{data.triangle_at(hes[0] // 3)}: {kind}: edge {edges[e].tolist()} "
-                             f"(triangles on {data.triangles_named(hes // 3)}); the mesh must be a "
-                             f"closed surface")
+            raise ValueError(f"{data.triangle_at(hes[0] // 3)}: {kind}: edge {data.ids(edges[e])} "
+                             f"({data.triangles_named(hes // 3)}); the mesh must be a closed surface")
     # duplicate triangles (same node set) are caught above as edges in >2 triangles,
     # except for a 2-triangle "pillow", excluded by len(tris) >= 4 and connectivity below.
     _check_vertex_fans(data, edges, he_edge)
@@ -352,7 +367,7 @@ def _check_vertex_fans(data, edges, he_edge):
             t = t_next
         if len(seen) != tri_count[v]:
             missing = next(x for x in incident[v] if x not in seen)
-            raise ValueError(f"{data.triangle_at(missing)}: node {v} joins separate sheets of "
+            raise ValueError(f"{data.triangle_at(missing)}: node {data.ids(v)} joins separate sheets of "
                              f"surface (its triangles do not form one fan); the mesh must be a "
                              f"2-manifold")
 
@@ -392,17 +407,17 @@ def _orient(data, he_edge, fix):
                 queue.append(u)
             elif flip[u] != needs_flip:
                 raise ValueError(f"{data.triangle_at(u)}: the surface is not orientable "
-                                 f"(Moebius-like); triangles on {data.triangles_named([t, u])} "
+                                 f"(Moebius-like); {data.triangles_named([t, u])} "
                                  f"cannot be oriented consistently")
     if not visited.all():
         u = int(np.nonzero(~visited)[0][0])
         raise ValueError(f"{data.triangle_at(u)}: the mesh has more than one connected surface "
-                         f"(this triangle is not connected to the one on {data.triangles_named([0])})")
+                         f"(this triangle is not connected to {data.triangles_named([0])})")
     if flip.any() and not fix:
         u = int(np.nonzero(flip)[0][0])
         if flip.sum() > m / 2:
             u = int(np.nonzero(~flip)[0][0])
-        raise ValueError(f"{data.triangle_at(u)}: triangle {tris[u].tolist()} is oriented "
+        raise ValueError(f"{data.triangle_at(u)}: triangle {data.ids(tris[u])} is oriented "
                          f"opposite to its neighbours; pass check_orientation=True to fix it")
     new = tris.copy()
     new[flip] = new[flip][:, [0, 2, 1]]
