@@ -158,6 +158,9 @@ def main():
     ap.add_argument("--rounds", type=int, default=60, help="rounds of --chunk runs")
     ap.add_argument("--csv", default="cell_cost.csv")
     args = ap.parse_args()
+    if args.chunk and (args.steps != ap.get_default("steps") or args.repeats != ap.get_default("repeats")):
+        ap.error("--steps and --repeats belong to --chunk 0 (the best of long runs); with --chunk "
+                 f"{args.chunk} the runs are set by --chunk and --rounds")
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("note: set OMP_NUM_THREADS=1 for the one-core figure")
     t_create = creation_time()

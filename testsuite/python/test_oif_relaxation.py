@@ -113,7 +113,7 @@ class TestRelaxation(unittest.TestCase):
 
     def test_shrunk_cell_gets_its_volume_back(self):
         """Shrunk by 5 % in every direction (volume -14 %), the cell returns to
-        V0 within 0.1 % (kv = 0.9, as in the other tests of this file)."""
+        V0 within 0.1 % (with make_cell's kv = 0.9)."""
         ct, cell = self.make_cell()
         _, rmsd, volumes = self.relax(cell, ct, lambda x: 0.95 * x)
         self.assertLess(volumes[0] / ct.volume0, 0.9)  # 10 steps in: still shrunk (0.95^3 = 0.857)
