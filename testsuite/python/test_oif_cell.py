@@ -150,6 +150,12 @@ class TestOifCell(unittest.TestCase):
         # the two deformed cells of one type differ (different random parts)
         self.assertNotEqual(deformed[0].get_energies()["bending"], deformed[1].get_energies()["bending"])
         self.assertAlmostEqual(total, s.analysis.energy()["bonded"], delta=1e-12 * total)
+        # all cells of a type at once: the same values, each type its own cells
+        by_cell = full.get_energies()
+        self.assertEqual(set(by_cell), {relaxed.cell_id, deformed[0].cell_id, deformed[1].cell_id})
+        for cell in (relaxed, deformed[0], deformed[1]):
+            self.assertEqual(by_cell[cell.cell_id], cell.get_energies())
+        self.assertEqual(set(partial.get_energies()), {deformed[2].cell_id})
 
     def test_motion(self):
         cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15])

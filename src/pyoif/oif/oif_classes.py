@@ -744,6 +744,28 @@ class OifCellType:
         print("\t volume: " + custom_str(self.volume0))
         print(" ")
 
+    #: the membrane energies, as OifCell.get_energies() and get_energies() name them
+    ENERGY_TERMS = ("stretching", "bending", "local_area", "global_area", "volume")
+
+    def get_energies(self):
+        """dict cell_id -> dict term -> energy for every cell of this type at
+        the current positions, from one pass over the bonds per interaction
+        (OifCell.get_energies() gives one cell's; to look at many cells, call
+        this once instead). Terms: 'stretching', 'bending', 'local_area',
+        'global_area', 'volume' (0.0 where the modulus is off) and 'total'.
+        Cells whose moduli are all zero have no bonds and are not listed."""
+        out = {}
+        for inter in (self.local_force_interaction, self.global_force_interaction):
+            if inter is None:
+                continue
+            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter))
+            for term, (mol_ids, values) in terms.items():
+                for mol, value in zip(np.asarray(mol_ids).tolist(), np.asarray(values).tolist()):
+                    out.setdefault(int(mol), dict.fromkeys(self.ENERGY_TERMS, 0.0))[term] = float(value)
+        for energies in out.values():
+            energies["total"] = sum(energies[t] for t in self.ENERGY_TERMS)
+        return out
+
     def suggest_LBgamma(self, visc=None, dens=None):
         """PyOIF's empirical fluid-coupling friction for this mesh density,
         fluid viscosity and density (lattice units): calibrated on the drag
@@ -1150,19 +1172,13 @@ class OifCell:
         6) and 'volume' (eq. 7), 0.0 where the modulus is off, and 'total'
         (their sum). The membrane viscosity dissipates and has no energy.
         Summed over all cells, the total is the bonded energy of
-        ``system.analysis.energy()`` when the cells have no other bonds."""
-        ct = self.cell_type
+        ``system.analysis.energy()`` when the cells have no other bonds.
+        This evaluates every cell of the type: for many cells at once use
+        ``cell_type.get_energies()`` (cell_id -> energies)."""
         self.mesh._live_parts()  # a stale cell's mol_id could belong to another cell now
-        out = {term: 0.0 for term, _ in self._FORCE_TERMS}
-        for inter in (ct.local_force_interaction, ct.global_force_interaction):
-            if inter is None:
-                continue
-            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter))
-            for term, (mol_ids, values) in terms.items():
-                here = np.flatnonzero(np.asarray(mol_ids) == self.cell_id)
-                out[term] = float(np.asarray(values)[here].sum())
-        out["total"] = sum(out[t] for t, _ in self._FORCE_TERMS)
-        return out
+        zero = dict.fromkeys(OifCellType.ENERGY_TERMS, 0.0)
+        zero["total"] = 0.0
+        return self.cell_type.get_energies().get(self.cell_id, zero)
 
     def elastic_forces(self, el_forces=(0, 0, 0, 0, 0, 0), f_metric=(0, 0, 0, 0, 0, 0), vtk_file=None,
                        raw_data_file=None):
