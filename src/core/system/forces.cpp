@@ -94,15 +94,21 @@ void System::add_bonded_forces(Energies* e) {
   }
   // Outside the fast path (several ranks, energies): the cell sums of every
   // OifGlobalForces group first, all cell types together, so that a parallel
-  // run makes one reduction per step for all cells instead of one per type.
+  // run makes one reduction per step for all cells instead of one per type;
+  // with them those of the OifOutDirection groups (their normals' orientation),
+  // so that no rank makes a reduction of its own later.
   std::vector<char> summed(n_groups, 0);
   if (!fast) {
     std::vector<std::pair<const BondGroup*, oif::CellSums*>> jobs;
-    for (std::size_t i = 0; i < n_groups; ++i)
+    for (std::size_t i = 0; i < n_groups; ++i) {
       if (auto* global = std::get_if<OifGlobalForces>(&bonded[i].interaction)) {
         jobs.emplace_back(&bonded[i].bonds, &global->sums);
         summed[i] = 1;
+      } else if (auto* out = std::get_if<OifOutDirection>(&bonded[i].interaction)) {
+        jobs.emplace_back(&bonded[i].bonds, &out->sums);
+        out->sums_current = true; // its prepare() below still writes the normals
       }
+    }
     if (!jobs.empty())
       oif::CellSums::compute_all(jobs, p, box, comm);
   }

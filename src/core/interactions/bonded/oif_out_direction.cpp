@@ -12,10 +12,13 @@ void OifOutDirection::prepare(const BondGroup& group, ParticleStore& p, const Bo
   const std::size_t n = group.size();
   std::uint64_t key = 1469598103934665603ULL ^ group.ids.size();
   for (const int id : group.ids)
-    key = (key ^ static_cast<std::uint64_t>(id)) * 1099511628211ULL;  // FNV-1a
-  if (key != m_bonds_key || m_sign.size() != n) {
+    key = (key ^ static_cast<std::uint64_t>(id)) * 1099511628211ULL; // FNV-1a
+  const bool summed = sums_current;
+  sums_current = false;
+  if (summed || key != m_bonds_key || m_sign.size() != n) {
     // oriented volume per cell: its sign says which way the triangles point
-    sums.compute(group, p, box, comm);
+    if (!summed)
+      sums.compute(group, p, box, comm);
     m_sign.resize(n);
     for (std::size_t b = 0; b < n; ++b)
       m_sign[b] = sums.volume[sums.bond_cell[b]] < 0.0 ? -1.0 : 1.0;
