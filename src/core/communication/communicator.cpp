@@ -11,7 +11,7 @@ void ensure_mpi_initialised() {
     MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
   }
 }
-}  // namespace
+} // namespace
 
 Communicator::Communicator() {
   ensure_mpi_initialised();
@@ -64,4 +64,4 @@ bool Communicator::any(bool flag) const {
   return f != 0;
 }
 
-}  // namespace pyoif
+} // namespace pyoif

@@ -49,4 +49,4 @@ private:
   mutable std::size_t m_collectives = 0;
 };
 
-}  // namespace pyoif
+} // namespace pyoif
