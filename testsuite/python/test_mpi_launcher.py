@@ -35,6 +35,23 @@ class MpiLauncher(unittest.TestCase):
         np.testing.assert_array_equal(pos2, pos)
         self.assertTrue(np.isfinite(energy))
 
+    def test_replicated_ranks_noted_once(self):
+        """Rank 0 says once that N ranks are N identical copies (no domain
+        decomposition yet), so that nobody books a cluster for nothing."""
+        import warnings
+
+        import lbmd.system
+        comm = MPI.COMM_WORLD
+        lbmd.system._replicated_ranks_noted = False  # as in a fresh process
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            lbmd.System(box_l=[5.0, 5.0, 5.0])
+            lbmd.System(box_l=[5.0, 5.0, 5.0])
+        notes = [w for w in caught if "identical copies" in str(w.message)]
+        self.assertEqual(len(notes), 1 if comm.Get_size() > 1 and comm.Get_rank() == 0 else 0)
+        if notes:
+            self.assertIn(f"these {comm.Get_size()} ranks", str(notes[0].message))
+
     def test_cell_output_outcome_shared_by_all_ranks(self):
         """Only rank 0 writes cell files; a refused append must be refused on
         every rank (before, only rank 0 raised and rank 1 read a file that
