@@ -74,6 +74,7 @@ def build(n_cells, fluid, seed=1):
 
 
 PHASES = lbmd.system.Integrator.PHASES
+TARGET = 0.1  # s per cell per 1000 steps (issue 4)
 
 
 def time_runs(systems, steps, repeats):
@@ -205,6 +206,14 @@ def main():
         rows.append({"cells": "fit_fixed", "fluid": not args.no_fluid, "measure": unit + " (extra, all cells)",
                      "s_per_1000_steps": fixed, "extra_s_per_cell_per_1000_steps": "",
                      "wall_s_per_1000_steps": ""})
+    if base is not None and not args.no_fluid and counts:
+        per_cell = {n: (s1000 - base) / n for n, (s1000, _, _) in zip(args.cells, results) if n > 0}
+        met = [n for n, x in per_cell.items() if x <= TARGET]
+        missed = [n for n, x in per_cell.items() if x > TARGET]
+        print(f"target (<= {TARGET} s per cell per 1000 steps): "
+              + (f"met at {'/'.join(map(str, met))} cells" if met else "not met")
+              + (f"; above it at {'/'.join(map(str, missed))} cells" if met and missed else "")
+              + f" (fluid alone {base:.2f} s per 1000 steps in this run: the less, the quieter the machine)")
     rows.append({"cells": "create_one_cell_s", "fluid": "", "measure": "wall s", "s_per_1000_steps": t_create,
                  "extra_s_per_cell_per_1000_steps": "", "wall_s_per_1000_steps": ""})
     write_rows(args.csv, rows)
