@@ -244,6 +244,15 @@ class Forces(unittest.TestCase):
         np.testing.assert_allclose(f_terms, f_total, rtol=0, atol=1e-12 * np.abs(f_total).max())
         # oif_forces leaves the particle forces alone
         np.testing.assert_array_equal(s.part.all().f, f_total)
+        # one cell's bonds only (mol_id): that cell's particles, the same forces
+        for bond_id, term in ((0, "bending"), (1, "volume")):
+            fid_all, f_all = s._core.oif_forces(bond_id, term)
+            for cell in range(2):
+                fid, f = s._core.oif_forces(bond_id, term, cell)
+                np.testing.assert_array_equal(fid, np.arange(n) + cell * n)
+                np.testing.assert_allclose(f, f_all[cell * n:(cell + 1) * n], rtol=0,
+                                           atol=1e-15 * np.abs(f_all).max())
+            self.assertEqual(len(s._core.oif_forces(bond_id, term, 7)[0]), 0)  # no such cell
 
         e = s.analysis.energy()
         e_local = s._core.oif_energies(0)
@@ -257,6 +266,11 @@ class Forces(unittest.TestCase):
                 self.assertTrue(np.all(values > 0))
                 total += values.sum()
         self.assertAlmostEqual(total, e["bonded"], delta=1e-12 * e["bonded"])
+        for cell in range(2):  # one cell's bonds only: that cell's energies
+            for bond_id, every in ((0, e_local), (1, e_global)):
+                for term, (mols, values) in s._core.oif_energies(bond_id, cell).items():
+                    np.testing.assert_array_equal(mols, [cell])
+                    self.assertAlmostEqual(values[0], every[term][1][cell], delta=1e-14 * values[0])
         # volume energy per cell: kv/2 (V - V0)^2 / V0
         np.testing.assert_allclose(e_global["volume"][1], 0.45 * (volumes - V0) ** 2 / V0,
                                    rtol=1e-10)

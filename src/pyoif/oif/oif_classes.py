@@ -747,18 +747,20 @@ class OifCellType:
     #: the membrane energies, as OifCell.get_energies() and get_energies() name them
     ENERGY_TERMS = ("stretching", "bending", "local_area", "global_area", "volume")
 
-    def get_energies(self):
+    def get_energies(self, cell_id=None):
         """dict cell_id -> dict term -> energy for every cell of this type at
         the current positions, from one pass over the bonds per interaction
         (OifCell.get_energies() gives one cell's; to look at many cells, call
         this once instead). Terms: 'stretching', 'bending', 'local_area',
         'global_area', 'volume' (0.0 where the modulus is off) and 'total'.
-        Cells whose moduli are all zero have no bonds and are not listed."""
+        Cells whose moduli are all zero have no bonds and are not listed.
+        cell_id: that cell's bonds only (what OifCell.get_energies() uses)."""
         out = {}
         for inter in (self.local_force_interaction, self.global_force_interaction):
             if inter is None:
                 continue
-            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter))
+            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter),
+                                                   -1 if cell_id is None else int(cell_id))
             for term, (mol_ids, values) in terms.items():
                 for mol, value in zip(np.asarray(mol_ids).tolist(), np.asarray(values).tolist()):
                     out.setdefault(int(mol), dict.fromkeys(self.ENERGY_TERMS, 0.0))[term] = float(value)
@@ -1154,7 +1156,7 @@ class OifCell:
             f = np.zeros((n, 3))
             if inter is not None:
                 bond_id = self.system.bonded_inter._id_of(inter)
-                fid, forces = self.system._core.oif_forces(bond_id, term)
+                fid, forces = self.system._core.oif_forces(bond_id, term, self.cell_id)  # this cell's bonds
                 fid = np.asarray(fid)
                 forces = np.asarray(forces).reshape(-1, 3)
                 index = {int(p): k for k, p in enumerate(fid)}
@@ -1173,12 +1175,11 @@ class OifCell:
         (their sum). The membrane viscosity dissipates and has no energy.
         Summed over all cells, the total is the bonded energy of
         ``system.analysis.energy()`` when the cells have no other bonds.
-        This evaluates every cell of the type: for many cells at once use
-        ``cell_type.get_energies()`` (cell_id -> energies)."""
+        For all cells of a type at once: ``cell_type.get_energies()``."""
         self.mesh._live_parts()  # a stale cell's mol_id could belong to another cell now
         zero = dict.fromkeys(OifCellType.ENERGY_TERMS, 0.0)
         zero["total"] = 0.0
-        return self.cell_type.get_energies().get(self.cell_id, zero)
+        return self.cell_type.get_energies(self.cell_id).get(self.cell_id, zero)
 
     def elastic_forces(self, el_forces=(0, 0, 0, 0, 0, 0), f_metric=(0, 0, 0, 0, 0, 0), vtk_file=None,
                        raw_data_file=None):

@@ -42,6 +42,34 @@ template <class T> py::array_t<T> to_array(const std::vector<T>& v) {
   return out;
 }
 
+/** The bonds of one cell (mol_id of a bond's first particle; bonds whose
+ *  first particle is missing stay, so that the bond loop names them), so
+ *  that the analysis of one cell costs that cell's bonds, not its type's. */
+BondGroup bonds_of_cell(const BondGroup& group, const ParticleStore& p, int mol_id) {
+  BondGroup out;
+  out.n_particles = group.n_particles;
+  out.per_bond_stride = group.per_bond_stride;
+  for (std::size_t b = 0; b < group.size(); ++b) {
+    const int i = p.index(group.bond(b)[0]);
+    if (i >= 0 && p.mol_id[i] != mol_id)
+      continue;
+    out.ids.insert(out.ids.end(), group.bond(b), group.bond(b) + group.n_particles);
+    if (group.per_bond_stride)
+      out.per_bond.insert(out.per_bond.end(), group.reference(b),
+                          group.reference(b) + group.per_bond_stride);
+  }
+  return out;
+}
+
+/** The group's bonds, or with mol_id >= 0 those of that cell only. */
+const BondGroup& selected_bonds(const BondedEntry& entry, const ParticleStore& p, int mol_id,
+                                BondGroup& storage) {
+  if (mol_id < 0)
+    return entry.bonds;
+  storage = bonds_of_cell(entry.bonds, p, mol_id);
+  return storage;
+}
+
 /** Sum of the bonds' energies per cell (mol_id of each bond's first particle). */
 template <class IA>
 std::map<int, double> energy_per_cell(System& s, IA ia, const BondGroup& group) {
@@ -66,15 +94,17 @@ py::tuple cell_sums(System& s, int bond_id) {
   return py::make_tuple(to_array(sums.mol_ids), to_array(sums.area), to_array(volume));
 }
 
-py::dict energies(System& s, int bond_id) {
+py::dict energies(System& s, int bond_id, int mol_id) {
   BondedEntry& entry = entry_of(s, bond_id);
+  BondGroup storage;
+  const BondGroup& bonds = selected_bonds(entry, s.particles, mol_id, storage);
   py::dict out;
   std::visit(
       [&](const auto& ia) {
         using IA = std::decay_t<decltype(ia)>;
         if constexpr (is_oif_analysable<IA>()) {
           for (const std::string& term : IA::energy_terms()) {
-            const auto e = energy_per_cell(s, ia.only(term), entry.bonds);
+            const auto e = energy_per_cell(s, ia.only(term), bonds);
             std::vector<int> mols;
             std::vector<double> values;
             for (const auto& [mol, value] : e) {
@@ -92,8 +122,10 @@ py::dict energies(System& s, int bond_id) {
   return out;
 }
 
-py::tuple forces(System& s, int bond_id, const std::string& term) {
+py::tuple forces(System& s, int bond_id, const std::string& term, int mol_id) {
   BondedEntry& entry = entry_of(s, bond_id);
+  BondGroup storage;
+  const BondGroup& bonds = selected_bonds(entry, s.particles, mol_id, storage);
   const ParticleStore& p = s.particles;
   std::vector<Vec3> f(p.n_local(), Vec3::Zero());
   std::vector<char> touched(p.n_local(), 0);
@@ -102,8 +134,8 @@ py::tuple forces(System& s, int bond_id, const std::string& term) {
         using IA = std::decay_t<decltype(ia)>;
         if constexpr (is_oif_analysable<IA>()) {
           IA one = ia.only(term);
-          prepare_bonds(one, entry.bonds, s.particles, s.box, s.comm);
-          for_each_bond(one, entry.bonds, p, s.box, s.time,
+          prepare_bonds(one, bonds, s.particles, s.box, s.comm);
+          for_each_bond(one, bonds, p, s.box, s.time,
                         [&](const auto& idx, const auto& fb, double, const auto&) {
                           for (std::size_t k = 0; k < idx.size(); ++k) {
                             f[idx[k]] += fb[k];
@@ -158,10 +190,12 @@ void bind_oif(py::module_& m) {
           "Exclude M pairs of particles (an M×2 id array) from the non-bonded interactions.")
       .def("oif_cell_sums", &cell_sums, py::arg("bond_id"),
            "(mol_ids, areas, volumes) of the cells of a triangle bond group, current positions.")
-      .def("oif_energies", &energies, py::arg("bond_id"),
-           "dict term -> (mol_ids, energies) of an OifLocalForces or OifGlobalForces group.")
-      .def("oif_forces", &forces, py::arg("bond_id"), py::arg("term"),
-           "(ids, N×3 forces) of one modulus of an OIF bond group; particle forces untouched.");
+      .def("oif_energies", &energies, py::arg("bond_id"), py::arg("mol_id") = -1,
+           "dict term -> (mol_ids, energies) of an OifLocalForces or OifGlobalForces group "
+           "(mol_id >= 0: of that cell's bonds only).")
+      .def("oif_forces", &forces, py::arg("bond_id"), py::arg("term"), py::arg("mol_id") = -1,
+           "(ids, N×3 forces) of one modulus of an OIF bond group (mol_id >= 0: of that cell's "
+           "bonds only); particle forces untouched.");
 }
 
 } // namespace pyoif::python
