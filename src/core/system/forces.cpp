@@ -97,18 +97,21 @@ void System::add_bonded_forces(Energies* e) {
   // run makes one reduction per step for all cells instead of one per type;
   // with them those of the OifOutDirection groups (their normals' orientation),
   // so that no rank makes a reduction of its own later.
-  std::vector<char> summed(n_groups, 0);
+  std::vector<char> summed; // per bonded id: its cell sums are done (empty: none)
   if (!fast) {
+    summed.assign(n_groups, 0);
     std::vector<std::pair<const BondGroup*, oif::CellSums*>> jobs;
-    for (std::size_t i = 0; i < n_groups; ++i) {
-      if (auto* global = std::get_if<OifGlobalForces>(&bonded[i].interaction)) {
-        jobs.emplace_back(&bonded[i].bonds, &global->sums);
-        summed[i] = 1;
-      } else if (auto* out = std::get_if<OifOutDirection>(&bonded[i].interaction)) {
-        jobs.emplace_back(&bonded[i].bonds, &out->sums);
-        out->sums_current = true; // its prepare() below still writes the normals
-      }
-    }
+    for (std::size_t i = 0; i < n_groups; ++i)
+      std::visit(
+          [&](auto& ia) {
+            using IA = std::decay_t<decltype(ia)>;
+            if constexpr (std::is_same_v<IA, OifGlobalForces> ||
+                          std::is_same_v<IA, OifOutDirection>) {
+              jobs.emplace_back(&bonded[i].bonds, &ia.sums);
+              summed[i] = 1;
+            }
+          },
+          bonded[i].interaction);
     if (!jobs.empty())
       oif::CellSums::compute_all(jobs, p, box, comm);
   }
@@ -127,8 +130,7 @@ void System::add_bonded_forces(Energies* e) {
               normals_written[bond_id] = m_fast_plans[bond_id].normals_written();
               return;
             }
-          if (!summed[bond_id]) // (an OifGlobalForces group's prepare() is its sums)
-            prepare_bonds(ia, entry.bonds, p, box, comm);
+          prepare_bonds(ia, entry.bonds, p, box, comm, !summed.empty() && summed[bond_id]);
           double energy_sum = 0.0;
           for_each_bond(
               ia, entry.bonds, p, box, time,

@@ -19,30 +19,33 @@ namespace pyoif {
 
 /** What an interaction's forces() sees of one bond. */
 template <int K> struct BondInput {
-  std::array<Vec3, K> x;  ///< positions, x[k>0] as minimum image relative to x[0]
-  std::array<Vec3, K> v;  ///< velocities
-  const double* reference = nullptr;  ///< per-bond reference values (or nullptr)
-  int mol_id = 0;  ///< cell (molecule) of the first particle
+  std::array<Vec3, K> x;             ///< positions, x[k>0] as minimum image relative to x[0]
+  std::array<Vec3, K> v;             ///< velocities
+  const double* reference = nullptr; ///< per-bond reference values (or nullptr)
+  int mol_id = 0;                    ///< cell (molecule) of the first particle
   std::size_t bond_index = 0;
-  bool want_energy = true;  ///< false in the time-step loop: energies may be skipped
+  bool want_energy = true; ///< false in the time-step loop: energies may be skipped
 };
 
 namespace detail {
 template <class IA, class = void> struct has_prepare : std::false_type {};
 template <class IA>
-struct has_prepare<IA, std::void_t<decltype(std::declval<IA&>().prepare(
-                           std::declval<const BondGroup&>(), std::declval<ParticleStore&>(),
-                           std::declval<const BoxGeometry&>(), std::declval<const Communicator&>()))>>
+struct has_prepare<
+    IA, std::void_t<decltype(std::declval<IA&>().prepare(
+            std::declval<const BondGroup&>(), std::declval<ParticleStore&>(),
+            std::declval<const BoxGeometry&>(), std::declval<const Communicator&>(), false))>>
     : std::true_type {};
-}  // namespace detail
+} // namespace detail
 
 /** Run the interaction's prepare() if it has one: a pass over all its bonds
- *  before any force (per-cell sums, node normals written to p.normal). */
+ *  before any force (per-cell sums, node normals written to p.normal).
+ *  sums_ready: the interaction's cell sums were computed for this step
+ *  already (the force loop sums all groups with one reduction). */
 template <class IA>
 void prepare_bonds(IA& ia, const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
-                   const Communicator& comm) {
+                   const Communicator& comm, bool sums_ready = false) {
   if constexpr (detail::has_prepare<IA>::value)
-    ia.prepare(group, p, box, comm);
+    ia.prepare(group, p, box, comm, sums_ready);
 }
 
 /** Visit every bond: sink(local_indices, forces, energy, input). With
@@ -86,4 +89,4 @@ void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
   }
 }
 
-}  // namespace pyoif
+} // namespace pyoif

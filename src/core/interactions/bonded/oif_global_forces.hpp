@@ -44,8 +44,9 @@ struct OifGlobalForces {
   }
 
   void prepare(const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
-               const Communicator& comm) {
-    sums.compute(group, p, box, comm);
+               const Communicator& comm, bool sums_ready) {
+    if (!sums_ready)
+      sums.compute(group, p, box, comm);
   }
 
   bool forces(const BondInput<3>& in, std::array<Vec3, 3>& f, double& energy) const {

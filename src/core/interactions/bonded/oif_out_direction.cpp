@@ -8,16 +8,14 @@
 namespace pyoif {
 
 void OifOutDirection::prepare(const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
-                              const Communicator& comm) {
+                              const Communicator& comm, bool sums_ready) {
   const std::size_t n = group.size();
   std::uint64_t key = 1469598103934665603ULL ^ group.ids.size();
   for (const int id : group.ids)
     key = (key ^ static_cast<std::uint64_t>(id)) * 1099511628211ULL; // FNV-1a
-  const bool summed = sums_current;
-  sums_current = false;
-  if (summed || key != m_bonds_key || m_sign.size() != n) {
+  if (sums_ready || key != m_bonds_key || m_sign.size() != n) {
     // oriented volume per cell: its sign says which way the triangles point
-    if (!summed)
+    if (!sums_ready)
       sums.compute(group, p, box, comm);
     m_sign.resize(n);
     for (std::size_t b = 0; b < n; ++b)

@@ -29,18 +29,15 @@ struct OifOutDirection {
    *  determined once per set of bonds (keyed by a checksum of the bond ids)
    *  rather than from a full area/volume pass every step; outside the fast
    *  path the force loop sums them each step anyway, with the other cells'
-   *  sums in the one reduction (sums_current). */
+   *  sums in the one reduction (sums_ready), and prepare() then takes the
+   *  orientation from them instead of a reduction of its own, which a rank
+   *  would make alone when only its own bonds changed. */
   std::uint64_t m_bonds_key = 0;
   std::vector<double> m_sign; ///< +1/-1 per bond: flips the normal outward
   std::vector<int> m_nodes;   ///< ids of the nodes that get a normal, each once
-  /** Set when `sums` were just computed for all ranks together (the force
-   *  loop's one reduction per step): prepare() then takes the orientation
-   *  from them instead of a reduction of its own, which a rank would make
-   *  alone when only its own bonds changed. Cleared by prepare(). */
-  bool sums_current = false;
 
   void prepare(const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
-               const Communicator& comm);
+               const Communicator& comm, bool sums_ready);
 
   bool forces(const BondInput<3>&, std::array<Vec3, 3>& f, double& energy) const {
     for (auto& fk : f)
