@@ -171,6 +171,7 @@ def main():
           + ("wall seconds of the quietest quarter of short runs are the figure)" if args.chunk else
              "CPU seconds are the figure; wall seconds grow with the load)"))
     rows = []
+    per_cell = {}  # cells -> extra s per cell per 1000 steps
     base = base_phases = None
     systems = [build(n, fluid=not args.no_fluid)[0] for n in args.cells]
     results = (time_chunks(systems, args.chunk, args.rounds) if args.chunk
@@ -179,6 +180,8 @@ def main():
         if n == 0:
             base, base_phases = s1000, phases
         extra = (s1000 - base) / n if (n and base is not None) else float("nan")
+        if n and base is not None:
+            per_cell[n] = extra
         row = {"cells": n, "fluid": not args.no_fluid, "measure": unit, "s_per_1000_steps": s1000,
                "extra_s_per_cell_per_1000_steps": extra, "wall_s_per_1000_steps": wall1000}
         row.update({f"{key}_s_per_1000_steps": phases[key] for key in PHASES})
@@ -206,8 +209,7 @@ def main():
         rows.append({"cells": "fit_fixed", "fluid": not args.no_fluid, "measure": unit + " (extra, all cells)",
                      "s_per_1000_steps": fixed, "extra_s_per_cell_per_1000_steps": "",
                      "wall_s_per_1000_steps": ""})
-    if base is not None and not args.no_fluid and counts:
-        per_cell = {n: (s1000 - base) / n for n, (s1000, _, _) in zip(args.cells, results) if n > 0}
+    if per_cell and not args.no_fluid:
         met = [n for n, x in per_cell.items() if x <= TARGET]
         missed = [n for n, x in per_cell.items() if x > TARGET]
         print(f"target (<= {TARGET} s per cell per 1000 steps): "

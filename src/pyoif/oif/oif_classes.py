@@ -744,8 +744,10 @@ class OifCellType:
         print("\t volume: " + custom_str(self.volume0))
         print(" ")
 
-    #: the membrane energies, as OifCell.get_energies() and get_energies() name them
-    ENERGY_TERMS = ("stretching", "bending", "local_area", "global_area", "volume")
+    #: the moduli's terms (also of the energies), and which interaction computes each
+    MODULUS_TERMS = (("stretching", "local"), ("bending", "local"), ("local_area", "local"),
+                     ("global_area", "global"), ("volume", "global"))
+    ENERGY_TERMS = tuple(term for term, _ in MODULUS_TERMS)
 
     def get_energies(self, cell_id=None):
         """dict cell_id -> dict term -> energy for every cell of this type at
@@ -1139,8 +1141,6 @@ class OifCell:
         print("\t particle ids: " + f"{self.mesh.part_ids[0]}..{self.mesh.part_ids[-1]}")
 
     # -- elastic forces ---------------------------------------------------------------
-    _FORCE_TERMS = (("stretching", "local"), ("bending", "local"), ("local_area", "local"),
-                    ("global_area", "global"), ("volume", "global"))
 
     def elastic_force_arrays(self):
         """dict term -> N x 3 forces on this cell's nodes from the engine, for
@@ -1151,7 +1151,7 @@ class OifCell:
         ids = self.mesh.part_ids
         n = len(ids)
         out = {}
-        for term, which in self._FORCE_TERMS:
+        for term, which in OifCellType.MODULUS_TERMS:
             inter = ct.local_force_interaction if which == "local" else ct.global_force_interaction
             f = np.zeros((n, 3))
             if inter is not None:
@@ -1164,7 +1164,7 @@ class OifCell:
                 have = sel >= 0
                 f[have] = forces[sel[have]]
             out[term] = f
-        out["total"] = sum(out[t] for t, _ in self._FORCE_TERMS)
+        out["total"] = sum(out[t] for t in OifCellType.ENERGY_TERMS)
         return out
 
     def get_energies(self):
