@@ -33,12 +33,7 @@ DEFAULT_EXCLUSION_RINGS = 2
 
 
 def _real(owner, name, value, check=None):
-    value = _real_number(f"{owner}: parameter '{name}'", value)
-    if check == "nonneg" and value < 0:
-        raise ValueError(f"{owner}: parameter '{name}' must be >= 0, got {value!r}")
-    if check == "pos" and value <= 0:
-        raise ValueError(f"{owner}: parameter '{name}' must be > 0, got {value!r}")
-    return value
+    return _real_number(f"{owner}: parameter '{name}'", value, check)
 
 
 def _vec3(owner, name, value, positive=False):

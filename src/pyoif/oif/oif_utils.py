@@ -139,10 +139,7 @@ def _checked(owner, name, value, kind):
     """TypeError for what is not numbers, ValueError for bad values (as the
     lbmd parameters)."""
     if kind in ("pos", "nonneg"):
-        x = _real_number(f"{owner}: '{name}'", value)
-        if x <= 0 if kind == "pos" else x < 0:
-            raise ValueError(f"{owner}: '{name}' must be {'> 0' if kind == 'pos' else '>= 0'}, got {value!r}")
-        return x
+        return _real_number(f"{owner}: '{name}'", value, kind)
     arr = _vector3(f"{owner}: '{name}'", value)
     if kind == "dir" and not np.any(arr != 0):
         raise ValueError(f"{owner}: '{name}' must not be the zero vector (it is a direction)")

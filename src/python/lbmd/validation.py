@@ -90,15 +90,20 @@ def parse(owner, params, kwargs):
     return out
 
 
-def real_number(where, value):
+def real_number(where, value, check=None):
     """value as a finite float; `where` names what is checked. TypeError for
     what is not a real number (booleans included), ValueError for NaN and
-    infinities."""
+    infinities and for values that fail `check`: a range check such as
+    ``positive`` or its name in ``named_checks`` ("pos", "nonneg")."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise TypeError(f"{where} must be a number, got {value!r}")
     value = float(value)
     if not math.isfinite(value):
         raise ValueError(f"{where} must be finite, got {value!r}")
+    if check is not None:
+        predicate, description = named_checks[check] if isinstance(check, str) else check
+        if not predicate(value):
+            raise ValueError(f"{where} must be {description}, got {value!r}")
     return value
 
 
@@ -168,6 +173,8 @@ def integers(owner, name, value, lo=0, hi=INT32_MAX):
 positive = (lambda x: x > 0, "> 0")
 non_negative = (lambda x: x >= 0, ">= 0")
 greater_than_one = (lambda x: x > 1, "> 1")
+#: range checks by the names the oif package gives them
+named_checks = {"pos": positive, "nonneg": non_negative}
 
 
 def in_open_range(lo, hi):
