@@ -187,3 +187,4 @@ print(f"share of cells entering the lower (width {w_low}) / upper (width {w_up})
       f" ({len(branch)} cells)")
 # where the time went (wall clock by phase of the step), as after a LAMMPS run
 print(system.integrator.timing_report())
+print(f"output in {os.path.abspath(args.output)}/: cells.csv, branches.csv" + (", VTK files" if args.vtk else ""))

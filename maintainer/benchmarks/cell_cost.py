@@ -6,7 +6,7 @@ RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--cells 0 5 20 60] [--chunk 10 --rounds 60]
         [--csv cell_cost.csv] [--no-fluid] [--chunk 0 --steps 200 --repeats 5]
 
-Scene (as the ESPResSo 4.2.2 timing in reference/model.md): channel
+Scene (as the ESPResSo 4.2.2 timing in doc/model.md): channel
 100 x 40 x 20 (agrid 1, tau = time step = 0.1, visc 1.5, dens 1) between two
 walls, RBCs rbc374 scaled by 4 with ks 0.005, kb 0.02, kal 0.007, kag 0.7,
 kv 0.9, coupling gamma 1.5, node-wall soft sphere and cell-cell membrane

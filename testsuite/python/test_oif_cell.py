@@ -12,6 +12,7 @@ import numpy as np
 import lbmd
 import oif
 from oif import mesh_io
+from testsuite_data import TEST_MESHES
 
 R_RBC = 3.91
 
@@ -264,9 +265,8 @@ class TestOifCell(unittest.TestCase):
         self.assertIn("n_nodes: 374", out.getvalue())
         self.assertIn("cell_id (mol_id): 0", out.getvalue())
         # calibration point of PyOIF's formula: 393 nodes, surface 201.06, visc 1.5, dens 1.025 -> 1.82
-        shared = os.environ.get("PYOIF_SHARED_DATA", "/work/shared/data")
-        sphere = oif.OifCellType(os.path.join(shared, "meshes", "sphere393nodes.dat"),
-                                 os.path.join(shared, "meshes", "sphere393triangles.dat"), system=self.system)
+        sphere = oif.OifCellType(os.path.join(TEST_MESHES, "sphere393nodes.dat"),
+                                 os.path.join(TEST_MESHES, "sphere393triangles.dat"), system=self.system)
         g = sphere.suggest_LBgamma(visc=1.5, dens=1.025)
         self.assertAlmostEqual(g, 1.82 * np.sqrt(sphere.surface0 / 201.0619), places=12)
         # finer mesh: friction per node scales with 1/n

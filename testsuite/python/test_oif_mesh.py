@@ -12,8 +12,7 @@ from scipy.integrate import quad
 import lbmd
 import oif
 
-SHARED = os.environ.get("PYOIF_SHARED_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "..",
-                                                          "shared", "data"))
+from testsuite_data import TEST_MESHES
 
 
 def evans_fung_volume_area():
@@ -408,7 +407,7 @@ class TestShippedMeshes(unittest.TestCase):
         """ESPResSo's PyOIF meshes read unchanged (their orientation is the
         stored one) and approximate the same Evans-Fung cell."""
         volume, area = evans_fung_volume_area()
-        folder = os.path.join(SHARED, "meshes")
+        folder = TEST_MESHES
         for n in (141, 374, 958):
             ct = oif.OifCellType(os.path.join(folder, f"rbc{n}nodes.dat"),
                                  os.path.join(folder, f"rbc{n}triangles.dat"),

@@ -13,7 +13,7 @@ import unittest
 
 import lbmd
 
-SHARED = os.environ.get("PYOIF_SHARED_DATA", "/work/shared/data")
+from testsuite_data import TEST_MESHES
 
 RELAXATION_SCRIPT = textwrap.dedent("""
     import sys
@@ -142,7 +142,7 @@ class TestPort(unittest.TestCase):
                 f.write(port(text))
             out = os.path.join(tmp, "out")
             os.mkdir(out)
-            res = subprocess.run([sys.executable, path, os.path.join(SHARED, "meshes"), out, *args],
+            res = subprocess.run([sys.executable, path, TEST_MESHES, out, *args],
                                  capture_output=True, text=True, timeout=600)
             files = sorted(os.listdir(out))
         self.assertEqual(res.returncode, 0, res.stdout + res.stderr)

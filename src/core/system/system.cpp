@@ -11,7 +11,7 @@
 
 namespace pyoif {
 
-// Until the domain decomposition lands (roadmap item 1), every rank of an
+// Until the domain decomposition lands, every rank of an
 // mpirun holds the whole system (replicated SPMD), so the System's reductions
 // run over MPI_COMM_SELF: a reduction over all ranks would count each particle
 // once per rank.

@@ -1,6 +1,6 @@
 """Helper functions with the names of PyOIF's ``object_in_fluid.oif_utils``:
 vector geometry of single triangles and dihedral angles, the elastic force
-formulas of the model (reference/model.md eqs. 3-7) for one element, and
+formulas of the model (doc/model.md, eqs. 3-7) for one element, and
 legacy-VTK output of shapes (rhomboid, cylinder, pore) for ParaView.
 
 The mesh-wide, vectorised versions live in ``oif.geometry``; these take
