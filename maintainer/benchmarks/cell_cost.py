@@ -26,8 +26,8 @@ prints the cost per cell as a share of the fluid-alone time.
 
 The same scene without fluid (--no-fluid: Langevin thermostat instead of
 LB) isolates the membrane and contact cost. Where the extra time goes is
-printed per phase of the step (integrator.timings(): bonded = membrane
-moduli, coupling = fluid coupling, lb_fluid = the lattice update, ...;
+printed per phase of the step (integrator.timings(): membrane = the
+cells' moduli, coupling = fluid coupling, lb_fluid = the lattice update, ...;
 wall clock of the same best run, so a busy machine shows in them). For a
 profile by function, run under perf, e.g.
     perf record -g -o cell_cost.perf -- build/pyoif maintainer/benchmarks/cell_cost.py --cells 20 --steps 500

@@ -5,15 +5,18 @@
 // requirement |F_fd - F| <= 1e-6 * max|F| (+1e-13): the central-difference
 // truncation error is O(h^2) ~ 1e-10 and the round-off O(eps E / h) ~ 1e-11.
 //
+// The OIF membrane terms run through the membrane component's driver, the
+// one the time step uses: forces from System::compute_forces(), energies from
+// System::compute_energies(), on one cell (the one-cell path, T = double) and
+// on four cells of one type (one batch in vector lanes).
 // The OIF area terms (eqs. 5, 6) allocate their force towards the triangle's
-// centroid (Jancigova & Cimrak 2015), which is not the gradient of any function
+// centroid (Jancigova & Cimrak 2016), which is not the gradient of any function
 // of the area; their reported energies are the work along a dilation, so for
-// them the check runs along dilation directions only (of each triangle for
-// local area, of the cell for global area).
+// them the check runs along dilation directions only (of the bond's points
+// for local area, of each cell for global area).
 #include "test_oif_mesh.hpp"
 
 #include "interactions/bonded/harmonic.hpp"
-#include "interactions/bonded/oif_edge_terms.hpp"
 #include "interactions/nonbonded/membrane_collision.hpp"
 #include "interactions/nonbonded/soft_sphere.hpp"
 
@@ -111,41 +114,119 @@ std::function<Config(std::mt19937&)> pair_at(double lo, double hi) {
   };
 }
 
-/** A whole OIF cell in a System: the energy is the total bonded energy. */
-Case cell_case(const std::string& name,
-               std::function<void(pyoif::System&, const oif_test::Mesh&)> add,
-               std::function<std::vector<Config>(const Config&)> directions = nullptr) {
-  auto mesh = std::make_shared<oif_test::Mesh>(oif_test::icosphere(1, 2.0));
+/** Membrane bonds in a System (added by `add` to n particles with ids 0 ..
+ *  n - 1): forces from compute_forces(), the energy the total bonded energy,
+ *  both through the membrane component's driver. */
+Case system_case(const std::string& name, std::size_t n,
+                 std::function<Config(std::mt19937&)> config,
+                 std::function<void(pyoif::System&)> add,
+                 std::function<std::vector<Config>(const Config&)> directions = nullptr,
+                 double length_scale = 1.0, bool in_lanes = false) {
   auto sys = oif_test::make_system(20.0);
-  oif_test::add_cell_particles(*sys, mesh->nodes, 0);
-  add(*sys, *mesh);
+  oif_test::add_cell_particles(*sys, std::vector<Vec3>(n, Vec3(1, 1, 1)), 0);
+  add(*sys);
   Case c;
   c.name = name;
-  c.length_scale = 2.0;
-  c.random_config = [mesh](std::mt19937& rng) {
-    // stretched, rough, randomly rotated, and across the periodic face z = L
-    Config x(mesh->nodes);
-    const Vec3 stretch(1.0 + 0.2 * uniform(rng), 1.0 + 0.2 * uniform(rng), 1.0);
-    const Eigen::Matrix3d rotation = oif_test::random_rotation(rng);
-    for (auto& xi : x)
-      xi = rotation * (stretch.cwiseProduct(xi) + 0.15 * random_vec(rng)) + Vec3(10, 10, 19.5);
-    return x;
-  };
+  c.length_scale = length_scale;
+  c.random_config = config;
   c.energy = [sys](const Config& x) {
     oif_test::set_positions(*sys, x);
     return sys->compute_energies().bonded;
   };
-  c.forces = [sys](const Config& x) {
+  c.forces = [sys, in_lanes, name](const Config& x) {
     oif_test::set_positions(*sys, x);
-    return oif_test::forces_of(*sys, x.size());
+    const pyoif::membrane::PassCounts before = sys->membranes.counts;
+    Config f = oif_test::forces_of(*sys, x.size());
+    // the path meant: four cells in vector lanes, or one cell alone
+    const pyoif::membrane::PassCounts& after = sys->membranes.counts;
+    EXPECT_EQ(after.lane_batches - before.lane_batches, in_lanes ? 1u : 0u) << name;
+    EXPECT_EQ(after.plain_cells - before.plain_cells, in_lanes ? 0u : 1u) << name;
+    return f;
   };
   c.directions = directions;
   return c;
 }
 
-/** Relaxed reference values of the unit cell mesh (radius 2). */
+constexpr int kCells = 4; ///< cells of the batch cases: one group of four vector lanes
+
+/** The unit-cell mesh (radius 2, 42 nodes), shared by the cases. */
+std::shared_ptr<const oif_test::Mesh> cell_mesh() {
+  static const auto mesh = std::make_shared<const oif_test::Mesh>(oif_test::icosphere(1, 2.0));
+  return mesh;
+}
+
+/** `cells` copies of the cell mesh, each stretched, rough and randomly
+ *  rotated, the first across the periodic face z = L. */
+std::function<Config(std::mt19937&)> deformed_cells(int cells) {
+  return [cells](std::mt19937& rng) {
+    const auto& nodes = cell_mesh()->nodes;
+    Config x;
+    for (int k = 0; k < cells; ++k) {
+      const Vec3 stretch(1.0 + 0.2 * uniform(rng), 1.0 + 0.2 * uniform(rng), 1.0);
+      const Eigen::Matrix3d rotation = oif_test::random_rotation(rng);
+      const Vec3 centre(5.0 + 10.0 * (k % 2), 5.0 + 10.0 * (k / 2 % 2), k == 0 ? 19.5 : 10.0);
+      for (const auto& xi : nodes)
+        x.push_back(rotation * (stretch.cwiseProduct(xi) + 0.15 * random_vec(rng)) + centre);
+    }
+    return x;
+  };
+}
+
+/** An OIF membrane on `cells` cells of the cell mesh (mol_id k, ids k * 42
+ *  ...), its bonds added by add(system, mesh, first id) per cell. */
+Case cell_case(const std::string& name, int cells,
+               std::function<void(pyoif::System&, const oif_test::Mesh&, int)> add,
+               std::function<std::vector<Config>(const Config&)> directions = nullptr) {
+  const std::size_t per_cell = cell_mesh()->nodes.size();
+  return system_case(
+      name + (cells > 1 ? "_lanes" : ""), cells * per_cell, deformed_cells(cells),
+      [=](pyoif::System& s) {
+        for (int k = 0; k < cells; ++k) {
+          for (std::size_t i = 0; i < per_cell; ++i)
+            s.particles.mol_id[s.particles.index(static_cast<int>(k * per_cell + i))] = k;
+          ++s.particles.mol_version;
+          add(s, *cell_mesh(), static_cast<int>(k * per_cell));
+        }
+      },
+      directions, 2.0, cells > 1);
+}
+
+/** Relaxed reference values of the cell mesh. */
 std::vector<double> cell_references(const oif_test::Mesh& m) {
   return oif_test::angle_references(m, m.nodes);
+}
+
+/** One OifLocalForces bond (B, A, C, D) = particles (1, 0, 2, 3) on a pair
+ *  of triangles bent by a random angle, randomly placed. */
+Case pair_bond_case(const std::string& name, OifLocalForces ia,
+                    std::function<Config(std::mt19937&)> config,
+                    std::function<std::vector<Config>(const Config&)> directions = nullptr) {
+  return system_case(
+      name, 4, config,
+      [ia](pyoif::System& s) {
+        const int id = s.add_bonded_interaction(ia);
+        s.add_bonds(id, {1, 0, 2, 3}, {1.1, 2.9, 0.45, 0.5}); // r0, phi0, A01, A02
+      },
+      directions);
+}
+
+/** Dilation directions: of all points about their centroid, per group of
+ *  `size` consecutive points (a cell). */
+std::function<std::vector<Config>(const Config&)> dilations(std::size_t size) {
+  return [size](const Config& x) {
+    std::vector<Config> out;
+    for (std::size_t first = 0; first < x.size(); first += size) {
+      Vec3 c = Vec3::Zero();
+      for (std::size_t i = first; i < first + size; ++i)
+        c += x[i];
+      c /= static_cast<double>(size);
+      Config d(x.size(), Vec3::Zero());
+      for (std::size_t i = first; i < first + size; ++i)
+        d[i] = x[i] - c;
+      out.push_back(d);
+    }
+    return out;
+  };
 }
 
 std::vector<Case> cases() {
@@ -154,7 +235,7 @@ std::vector<Case> cases() {
     // two triangles on a common edge, bent by a random angle, randomly placed
     Config x = {Vec3(0.1, 0.9, 0.0), Vec3(0, 0, 0), Vec3(1.0, 0.1, 0.0), Vec3(0.6, -0.8, 0.0)};
     for (auto& xi : x)
-      xi += 0.3 * random_vec(rng);
+      xi += 0.3 * random_vec(rng) + Vec3(5, 5, 5);
     return x;
   };
   const auto edge = [](std::mt19937& rng) {
@@ -184,102 +265,73 @@ std::vector<Case> cases() {
           const Vec3 dir = (side * u + 0.5 * random_vec(rng)).normalized();
           return Config{x0 + (0.1 + 0.25 * (1.0 + uniform(rng))) * dir, x0};
         }));
-  // ---- OIF terms, each on its own
-  const std::vector<double> ref4 = {1.1, 2.9, 0.45, 0.5}; // r0, phi0, A01, A02
-  out.push_back(bonded_case<OifLocalForces, 4>("oif_stretching", OifLocalForces{0.7, 0, 0, 0, 0},
-                                               ref4, four_points));
-  out.push_back(bonded_case<OifLocalForces, 4>("oif_stretching_linear",
-                                               OifLocalForces{0, 0.7, 0, 0, 0}, ref4, four_points));
-  out.push_back(bonded_case<OifLocalForces, 4>("oif_bending", OifLocalForces{0, 0, 0.7, 0, 0}, ref4,
-                                               four_points));
+  // ---- OIF terms, each on its own, on one bond (one triangle pair)
+  out.push_back(pair_bond_case("oif_stretching", OifLocalForces{0.7, 0, 0, 0, 0}, four_points));
+  out.push_back(
+      pair_bond_case("oif_stretching_linear", OifLocalForces{0, 0.7, 0, 0, 0}, four_points));
+  out.push_back(pair_bond_case("oif_bending", OifLocalForces{0, 0, 0.7, 0, 0}, four_points));
   // neo-Hookean edge over a wide strain range (lambda 0.3 .. 3)
-  out.push_back(bonded_case<OifLocalForces, 4>(
-      "oif_stretching_large_strain", OifLocalForces{0.7, 0, 0, 0, 0}, ref4, [](std::mt19937& rng) {
+  out.push_back(pair_bond_case(
+      "oif_stretching_large_strain", OifLocalForces{0.7, 0, 0, 0, 0}, [](std::mt19937& rng) {
         Config x = {Vec3(0.1, 0.9, 0.0), Vec3(0, 0, 0), Vec3(1.0, 0.1, 0.0), Vec3(0.6, -0.8, 0.0)};
-        x[2] = x[0] + (0.3 + 1.35 * (1.0 + uniform(rng))) * 1.1 * random_vec(rng).normalized();
+        x[2] = x[1] + (0.3 + 1.35 * (1.0 + uniform(rng))) * 1.1 * random_vec(rng).normalized();
+        for (auto& xi : x)
+          xi += Vec3(5, 5, 5);
         return x;
       }));
-  // local area, eq. 5, on one triangle (the evaluator OifLocalForces applies
-  // with weight 1/3 in each of the triangle's three bonds; that composition is
-  // checked against eq. 5 in test_oif_membrane.cpp), along its dilation
-  {
-    Case c;
-    c.name = "oif_local_area_triangle";
-    const double kal = 0.9, area0 = 0.3;
-    c.random_config = [](std::mt19937& rng) {
-      return Config{random_vec(rng), Vec3(1, 0, 0) + 0.3 * random_vec(rng),
-                    Vec3(0, 1, 0) + 0.3 * random_vec(rng)};
-    };
-    c.energy = [=](const Config& x) {
-      return oif::local_area_energy(oif::triangle_area(x[0], x[1], x[2]), area0, kal);
-    };
-    c.forces = [=](const Config& x) {
-      Config f(3, Vec3::Zero());
-      const double coefficient =
-          oif::local_area_coefficient(oif::triangle_area(x[0], x[1], x[2]), area0, kal);
-      oif::add_centroid_allocated(x[0], x[1], x[2], coefficient, f[0], f[1], f[2]);
-      return f;
-    };
-    c.directions = [](const Config& x) {
-      const Vec3 t = (x[0] + x[1] + x[2]) / 3.0;
-      return std::vector<Config>{{x[0] - t, x[1] - t, x[2] - t}};
-    };
-    out.push_back(c);
+  // local area (eq. 5, a third on each of the bond's two triangles) along the
+  // dilation of the four points: it dilates each triangle about a moving
+  // point, and a triangle's centroid-allocated forces do no work in a translation
+  out.push_back(pair_bond_case("oif_local_area_pair", OifLocalForces{0, 0, 0, 0.9, 0}, four_points,
+                               dilations(4)));
+  // ---- whole cells: one (the one-cell path) and four (one batch in vector lanes)
+  const std::size_t per_cell = cell_mesh()->nodes.size();
+  for (const int cells : {1, kCells}) {
+    out.push_back(
+        cell_case("oif_volume", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+          OifGlobalForces g;
+          g.kv = 0.8;
+          g.V0 = 30.0;
+          g.A0_g = 1.0;
+          const int id = s.add_bonded_interaction(g);
+          s.add_bonds(id, oif_test::triangle_bond_ids(m, first), {});
+        }));
+    out.push_back(cell_case(
+        "oif_bending_cell", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+          const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0.6, 0, 0});
+          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
+        }));
+    out.push_back(cell_case(
+        "oif_stretching_cell", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+          const int id = s.add_bonded_interaction(OifLocalForces{0.5, 0.2, 0, 0, 0});
+          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
+        }));
+    out.push_back(
+        cell_case("oif_stretching_linear_cell", cells,
+                  [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+                    const int id = s.add_bonded_interaction(OifLocalForces{0, 0.4, 0, 0, 0});
+                    s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
+                  }));
+    // the area terms along each cell's dilation (see above)
+    out.push_back(cell_case(
+        "oif_local_area_cell", cells,
+        [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+          const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0, 0.6, 0});
+          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
+        },
+        dilations(per_cell)));
+    out.push_back(cell_case(
+        "oif_global_area", cells,
+        [](pyoif::System& s, const oif_test::Mesh& m, int first) {
+          OifGlobalForces g;
+          g.ka_g = 0.9;
+          g.A0_g = 40.0;
+          g.V0 = 1.0;
+          const int id = s.add_bonded_interaction(g);
+          s.add_bonds(id, oif_test::triangle_bond_ids(m, first), {});
+        },
+        dilations(per_cell)));
   }
-  out.push_back(cell_case("oif_volume", [](pyoif::System& s, const oif_test::Mesh& m) {
-    OifGlobalForces g;
-    g.kv = 0.8;
-    g.V0 = 30.0;
-    g.A0_g = 1.0;
-    const int id = s.add_bonded_interaction(g);
-    s.add_bonds(id, oif_test::triangle_bond_ids(m), {});
-  }));
-  out.push_back(cell_case("oif_bending_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
-    const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0.6, 0, 0});
-    s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
-  }));
-  out.push_back(cell_case("oif_stretching_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
-    const int id = s.add_bonded_interaction(OifLocalForces{0.5, 0.2, 0, 0, 0});
-    s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
-  }));
-  out.push_back(
-      cell_case("oif_stretching_linear_cell", [](pyoif::System& s, const oif_test::Mesh& m) {
-        const int id = s.add_bonded_interaction(OifLocalForces{0, 0.4, 0, 0, 0});
-        s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
-      }));
-  // global area along the cell's dilation about its centroid
-  auto cell_dilation = [](const Config& x) {
-    Vec3 c = Vec3::Zero();
-    for (const auto& xi : x)
-      c += xi;
-    c /= static_cast<double>(x.size());
-    Config d(x.size());
-    for (std::size_t i = 0; i < x.size(); ++i)
-      d[i] = x[i] - c;
-    return std::vector<Config>{d};
-  };
-  // local area of every triangle of the cell (each bond applies a third of
-  // eq. 5 to each of its two triangles) along the cell's dilation: that
-  // dilates every triangle about a moving point, and the centroid-allocated
-  // forces of a triangle do no work in a translation
-  out.push_back(cell_case(
-      "oif_local_area_cell",
-      [](pyoif::System& s, const oif_test::Mesh& m) {
-        const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0, 0.6, 0});
-        s.add_bonds(id, oif_test::local_bond_ids(m), cell_references(m));
-      },
-      cell_dilation));
-  out.push_back(cell_case(
-      "oif_global_area",
-      [](pyoif::System& s, const oif_test::Mesh& m) {
-        OifGlobalForces g;
-        g.ka_g = 0.9;
-        g.A0_g = 40.0;
-        g.V0 = 1.0;
-        const int id = s.add_bonded_interaction(g);
-        s.add_bonds(id, oif_test::triangle_bond_ids(m), {});
-      },
-      cell_dilation));
   return out;
 }
 

@@ -7,7 +7,6 @@
 // collision pushes two cells apart and reverses when the membranes have crossed.
 #include "test_oif_mesh.hpp"
 
-#include "interactions/bonded/oif_cell_sums.hpp"
 #include "interactions/nonbonded/membrane_collision.hpp"
 
 #include <gtest/gtest.h>
@@ -23,39 +22,45 @@ namespace {
 
 constexpr double R = 3.0; // sphere radius (PyOIF-like lattice units)
 
-/** One modulus switched on; everything else zero. */
+/** One modulus switched on; everything else zero. add(system, mesh,
+ *  relaxed, first): the bonds of the cell whose nodes are the particles
+ *  first .. first + nodes - 1. */
 struct Modulus {
   std::string name;
-  std::function<void(System&, const Mesh&, const std::vector<Vec3>& relaxed)> add;
+  std::function<void(System&, const Mesh&, const std::vector<Vec3>& relaxed, int first)> add;
 };
 
-void add_local(System& s, const Mesh& m, const std::vector<Vec3>& relaxed, OifLocalForces ia) {
+void add_local(System& s, const Mesh& m, const std::vector<Vec3>& relaxed, OifLocalForces ia,
+               int first = 0) {
   const int id = s.add_bonded_interaction(ia);
-  s.add_bonds(id, oif_test::local_bond_ids(m), oif_test::angle_references(m, relaxed));
+  s.add_bonds(id, oif_test::local_bond_ids(m, first), oif_test::angle_references(m, relaxed));
 }
 void add_global(System& s, const Mesh& m, const std::vector<Vec3>& relaxed, double kag, double kv,
-                bool flip = false) {
+                bool flip = false, int first = 0) {
   OifGlobalForces g;
   g.ka_g = kag;
   g.kv = kv;
   // relaxed surface and volume from the same sums the interaction uses
   auto tmp = oif_test::make_system(s.box.length()[0]);
   oif_test::add_cell_particles(*tmp, relaxed, 0);
-  BondGroup group;
-  group.n_particles = 3;
-  group.ids = oif_test::triangle_bond_ids(m);
-  oif::CellSums sums;
-  sums.compute(group, tmp->particles, tmp->box, tmp->comm);
-  g.A0_g = sums.area[0];
-  g.V0 = std::abs(sums.volume[0]);
+  const int probe = tmp->add_bonded_interaction(OifOutDirection{});
+  tmp->add_bonds(probe, oif_test::triangle_bond_ids(m), {});
+  const auto [area, volume] = oif_test::cell_area_volume(*tmp, probe).at(0);
+  g.A0_g = area;
+  g.V0 = std::abs(volume);
   const int id = s.add_bonded_interaction(g);
-  s.add_bonds(id, oif_test::triangle_bond_ids(m, 0, flip), {});
+  s.add_bonds(id, oif_test::triangle_bond_ids(m, first, flip), {});
 }
 
 std::vector<Modulus> moduli() {
   auto local = [](double ks, double kslin, double kb, double kal, double kvisc) {
-    return [=](System& s, const Mesh& m, const std::vector<Vec3>& x0) {
-      add_local(s, m, x0, OifLocalForces{ks, kslin, kb, kal, kvisc});
+    return [=](System& s, const Mesh& m, const std::vector<Vec3>& x0, int first) {
+      add_local(s, m, x0, OifLocalForces{ks, kslin, kb, kal, kvisc}, first);
+    };
+  };
+  auto global = [](double kag, double kv) {
+    return [=](System& s, const Mesh& m, const std::vector<Vec3>& x0, int first) {
+      add_global(s, m, x0, kag, kv, false, first);
     };
   };
   return {{"stretching", local(1.0, 0, 0, 0, 0)},
@@ -63,11 +68,30 @@ std::vector<Modulus> moduli() {
           {"bending", local(0, 0, 1.0, 0, 0)},
           {"local_area", local(0, 0, 0, 1.0, 0)},
           {"visc", local(0, 0, 0, 0, 1.0)},
-          {"global_area", [](System& s, const Mesh& m,
-                             const std::vector<Vec3>& x0) { add_global(s, m, x0, 1.0, 0.0); }},
-          {"volume", [](System& s, const Mesh& m, const std::vector<Vec3>& x0) {
-             add_global(s, m, x0, 0.0, 1.0);
-           }}};
+          {"global_area", global(1.0, 0.0)},
+          {"volume", global(0.0, 1.0)}};
+}
+
+/** `cells` copies of mesh m placed by place(cell, node) (cell k: mol_id k,
+ *  particles k * nodes ...), with velocities v(cell, node), and the modulus'
+ *  bonds on each; the membrane pass then takes them one at a time (1 cell)
+ *  or as one batch of four vector lanes (4 cells). */
+std::shared_ptr<System> cells_with(const Mesh& m, int cells, const Modulus& mod,
+                                   const std::function<Vec3(int, std::size_t)>& place,
+                                   const std::function<Vec3(int, std::size_t)>& velocity,
+                                   double box = 50.0) {
+  auto s = oif_test::make_system(box);
+  const std::size_t n = m.nodes.size();
+  for (int k = 0; k < cells; ++k) {
+    std::vector<Vec3> x(n), v(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = place(k, i);
+      v[i] = velocity(k, i);
+    }
+    oif_test::add_cell_particles(*s, x, k, static_cast<int>(k * n), &v);
+    mod.add(*s, m, m.nodes, static_cast<int>(k * n));
+  }
+  return s;
 }
 
 /** The relaxed icosphere (level 2: 162 nodes, 320 triangles, 480 angles). */
@@ -85,50 +109,61 @@ TEST(OifMembrane, IcosphereIsClosedAndOutward) {
   EXPECT_EQ(m.angles.size(), 480u); // = edges: every edge in exactly one pair
   auto s = oif_test::make_system();
   oif_test::add_cell_particles(*s, m.nodes, 0);
-  BondGroup g;
-  g.n_particles = 3;
-  g.ids = oif_test::triangle_bond_ids(m);
-  oif::CellSums sums;
-  sums.compute(g, s->particles, s->box, s->comm);
-  EXPECT_GT(sums.volume[0], 0.0);
+  const int id = s->add_bonded_interaction(OifOutDirection{});
+  s->add_bonds(id, oif_test::triangle_bond_ids(m), {});
+  EXPECT_GT(oif_test::cell_area_volume(*s, id).at(0).second, 0.0);
 }
 
-// Every modulus on a randomly deformed, randomly rotated mesh: the cell's total
-// force and torque vanish. Tolerance 1e-12 relative to sum |F_i| (and R sum |F_i|
-// for the torque): round-off of ~1e3 additions of O(1) terms is ~1e-13.
+// Every modulus on randomly deformed, randomly rotated meshes: each cell's
+// total force and torque vanish, for one cell (the one-cell path) and four
+// (one batch of vector lanes). Tolerance 1e-12 relative to sum |F_i| (and R
+// sum |F_i| for the torque): round-off of ~1e3 additions of O(1) terms is
+// ~1e-13.
 TEST(OifMembrane, ForceAndTorqueFree) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Mesh& m = mesh();
-  for (const auto& mod : moduli())
-    for (int trial = 0; trial < 3; ++trial) {
-      const Eigen::Matrix3d rot = oif_test::random_rotation(rng);
-      const Vec3 stretch(1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng));
-      const Vec3 shift(25.0 + 5 * u(rng), 25.0 + 5 * u(rng), 25.0 + 5 * u(rng));
-      std::vector<Vec3> x(m.nodes.size()), v(m.nodes.size());
-      for (std::size_t i = 0; i < x.size(); ++i) {
-        const Vec3 noise(u(rng), u(rng), u(rng));
-        x[i] = rot * (stretch.cwiseProduct(m.nodes[i]) + 0.1 * noise) + shift;
-        v[i] = Vec3(u(rng), u(rng), u(rng));
+  const std::size_t n = m.nodes.size();
+  for (const int cells : {1, 4})
+    for (const auto& mod : moduli())
+      for (int trial = 0; trial < 3; ++trial) {
+        std::vector<Eigen::Matrix3d> rot;
+        std::vector<Vec3> stretch, shift;
+        for (int k = 0; k < cells; ++k) {
+          rot.push_back(oif_test::random_rotation(rng));
+          stretch.emplace_back(1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng), 1.0 + 0.2 * u(rng));
+          shift.emplace_back(12.0 + 25.0 * (k % 2) + 3 * u(rng), 12.0 + 25.0 * (k / 2) + 3 * u(rng),
+                             25.0 + 5 * u(rng));
+        }
+        auto s = cells_with(
+            m, cells, mod,
+            [&](int k, std::size_t i) {
+              const Vec3 noise(u(rng), u(rng), u(rng));
+              return Vec3(rot[k] * (stretch[k].cwiseProduct(m.nodes[i]) + 0.1 * noise) + shift[k]);
+            },
+            [&](int, std::size_t) { return Vec3(u(rng), u(rng), u(rng)); });
+        const auto before = s->membranes.counts;
+        const auto x = oif_test::positions_of(*s, cells * n);
+        const auto f = oif_test::forces_of(*s, cells * n);
+        EXPECT_EQ(s->membranes.counts.lane_batches - before.lane_batches, cells > 1 ? 1u : 0u);
+        for (int k = 0; k < cells; ++k) {
+          Vec3 total = Vec3::Zero(), torque = Vec3::Zero();
+          double scale = 0.0;
+          for (std::size_t i = k * n; i < (k + 1) * n; ++i) {
+            total += f[i];
+            torque += (x[i] - shift[k]).cross(f[i]);
+            scale += f[i].norm();
+          }
+          ASSERT_GT(scale, 1e-3) << mod.name << ": the deformation must load the modulus";
+          if (k == 0)
+            std::cout << "[ figure ] " << mod.name << " (" << cells << " cells) trial " << trial
+                      << ": |sum F| / sum|F| = " << total.norm() / scale
+                      << ", |torque| / (R sum|F|) = " << torque.norm() / (scale * R) << "\n";
+          EXPECT_LT(total.norm(), 1e-12 * scale) << mod.name << " trial " << trial << " cell " << k;
+          EXPECT_LT(torque.norm(), 1e-12 * scale * R)
+              << mod.name << " trial " << trial << " cell " << k;
+        }
       }
-      auto s = oif_test::make_system();
-      oif_test::add_cell_particles(*s, x, 0, 0, &v);
-      mod.add(*s, m, m.nodes);
-      const auto f = oif_test::forces_of(*s, x.size());
-      Vec3 total = Vec3::Zero(), torque = Vec3::Zero();
-      double scale = 0.0;
-      for (std::size_t i = 0; i < x.size(); ++i) {
-        total += f[i];
-        torque += (x[i] - shift).cross(f[i]);
-        scale += f[i].norm();
-      }
-      ASSERT_GT(scale, 1e-3) << mod.name << ": the deformation must load the modulus";
-      std::cout << "[ figure ] " << mod.name << " trial " << trial
-                << ": |sum F| / sum|F| = " << total.norm() / scale
-                << ", |torque| / (R sum|F|) = " << torque.norm() / (scale * R) << "\n";
-      EXPECT_LT(total.norm(), 1e-12 * scale) << mod.name << " trial " << trial;
-      EXPECT_LT(torque.norm(), 1e-12 * scale * R) << mod.name << " trial " << trial;
-    }
 }
 
 // Each modulus as composed by the bonds equals the model's equation evaluated
@@ -261,28 +296,115 @@ TEST(OifMembrane, ModuliMatchModelEquations) {
 
 // The relaxed mesh, rotated and moved so that it straddles the periodic box
 // corner, feels no force from any modulus (reference values from the unmoved
-// mesh). Tolerance 1e-10 (unit moduli, forces O(1) at 10% strain).
+// mesh), alone and as four cells (one batch of vector lanes). Tolerance 1e-10
+// (unit moduli, forces O(1) at 10% strain).
 TEST(OifMembrane, RelaxedMeshIsForceFree) {
   std::mt19937 rng(7);
   const Mesh& m = mesh();
   const double box = 20.0;
-  for (const auto& mod : moduli()) {
-    if (mod.name == "visc")
-      continue; // dissipative: zero at rest trivially
-    const Eigen::Matrix3d rot = oif_test::random_rotation(rng);
-    std::vector<Vec3> x(m.nodes.size());
-    for (std::size_t i = 0; i < x.size(); ++i)
-      x[i] = rot * m.nodes[i] + Vec3(0.3, box - 0.2, 0.1); // across three periodic faces
-    auto s = oif_test::make_system(box);
-    oif_test::add_cell_particles(*s, x, 0);
-    mod.add(*s, m, m.nodes);
-    const auto f = oif_test::forces_of(*s, x.size());
-    double fmax = 0.0;
-    for (const auto& fi : f)
-      fmax = std::max(fmax, fi.norm());
-    EXPECT_LT(fmax, 1e-10) << mod.name;
-    std::cout << "[ figure ] relaxed " << mod.name << ": max |F| = " << fmax << "\n";
+  for (const int cells : {1, 4})
+    for (const auto& mod : moduli()) {
+      if (mod.name == "visc")
+        continue; // dissipative: zero at rest trivially
+      std::vector<Eigen::Matrix3d> rot;
+      for (int k = 0; k < cells; ++k)
+        rot.push_back(oif_test::random_rotation(rng));
+      auto s = cells_with(
+          m, cells, mod,
+          [&](int k, std::size_t i) {
+            // the first across three periodic faces, the others beside it
+            return Vec3(rot[k] * m.nodes[i] + Vec3(0.3 + 5.0 * k, box - 0.2, 0.1 + 5.0 * k));
+          },
+          [](int, std::size_t) { return Vec3::Zero(); }, box);
+      const auto f = oif_test::forces_of(*s, cells * m.nodes.size());
+      double fmax = 0.0;
+      for (const auto& fi : f)
+        fmax = std::max(fmax, fi.norm());
+      EXPECT_LT(fmax, 1e-10) << mod.name << ", " << cells << " cells";
+      std::cout << "[ figure ] relaxed " << mod.name << " (" << cells
+                << " cells): max |F| = " << fmax << "\n";
+    }
+}
+
+// The membrane pass evaluates four cells of a type at once, one per vector
+// lane (the last two or three of a type padded), and a lone cell alone, by
+// the same driver: forces and node normals equal bit for bit those of every
+// cell alone. Seven deformed, rotated and moving cells with every modulus and
+// normals; some dihedral deviations beyond the polynomial arctangent's 14
+// degrees (strongly deformed cells), one across the box corner.
+TEST(OifMembrane, LanesEqualOneCellAtATimeBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  const Modulus all{"all",
+                    [](System& s, const Mesh& mesh_, const std::vector<Vec3>& x0, int first) {
+                      add_local(s, mesh_, x0, OifLocalForces{0.5, 0.2, 0.8, 0.6, 0.3}, first);
+                      add_global(s, mesh_, x0, 0.7, 0.9, false, first);
+                      const int id = s.add_bonded_interaction(OifOutDirection{});
+                      s.add_bonds(id, oif_test::triangle_bond_ids(mesh_, first), {});
+                    }};
+  const double noise[7] = {0.02, 0.1, 0.4, 0.05, 0.3, 0.01, 0.2};
+  auto s = cells_with(
+      m, 7, all,
+      [&](int k, std::size_t i) {
+        return Vec3(m.nodes[i] + noise[k] * Vec3(u(rng), u(rng), u(rng)) +
+                    Vec3(0.5 + 7.0 * k, 49.8, 0.3));
+      },
+      [&](int, std::size_t) { return Vec3(u(rng), u(rng), u(rng)); });
+  const std::size_t all_nodes = 7 * n;
+  auto normals = [&](System& sys) {
+    std::vector<Vec3> out(all_nodes);
+    for (std::size_t i = 0; i < all_nodes; ++i)
+      out[i] = sys.particles.normal[sys.particles.index(static_cast<int>(i))];
+    return out;
+  };
+  const auto f_lanes = oif_test::forces_of(*s, all_nodes);
+  const auto n_lanes = normals(*s);
+  EXPECT_EQ(s->membranes.counts.lane_batches, 2u); // four, and three padded to four
+  EXPECT_EQ(s->membranes.counts.padded_lanes, 1u);
+  EXPECT_EQ(s->membranes.counts.plain_cells, 0u);
+  s->membranes.lanes = false;
+  const auto f_plain = oif_test::forces_of(*s, all_nodes);
+  const auto n_plain = normals(*s);
+  EXPECT_EQ(s->membranes.counts.plain_cells, 7u);
+  double fmax = 0.0;
+  for (std::size_t i = 0; i < all_nodes; ++i) {
+    fmax = std::max(fmax, f_lanes[i].norm());
+    EXPECT_EQ(f_lanes[i], f_plain[i]) << "node " << i;
+    EXPECT_EQ(n_lanes[i], n_plain[i]) << "node " << i;
   }
+  EXPECT_GT(fmax, 1e-2);
+}
+
+// The time step runs the vector lanes: eight cells of a type are two batches
+// in every force calculation of a run, none alone, and the tables are
+// compiled once; a cell added later is compiled in, and the ninth goes alone.
+TEST(OifMembrane, TimeStepRunsTheLanes) {
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  const Modulus local{"local",
+                      [](System& s, const Mesh& mesh_, const std::vector<Vec3>& x0, int first) {
+                        add_local(s, mesh_, x0, OifLocalForces{0.5, 0, 0.8, 0.6, 0}, first);
+                      }};
+  auto s = cells_with(
+      m, 8, local,
+      [&](int k, std::size_t i) { return Vec3(m.nodes[i] * 1.05 + Vec3(5.0 + 7.0 * k, 25, 25)); },
+      [](int, std::size_t) { return Vec3::Zero(); }, 60.0);
+  s->set_time_step(0.01);
+  s->integrate(10); // its first force calculation, then one per step
+  EXPECT_EQ(s->membranes.counts.compiles, 1u);
+  EXPECT_EQ(s->membranes.counts.lane_batches, 2u * 11u);
+  EXPECT_EQ(s->membranes.counts.plain_cells, 0u);
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i)
+    x[i] = m.nodes[i] + Vec3(30, 45, 25);
+  oif_test::add_cell_particles(*s, x, 8, static_cast<int>(8 * n));
+  local.add(*s, m, m.nodes, static_cast<int>(8 * n));
+  s->integrate(10);
+  EXPECT_EQ(s->membranes.counts.compiles, 2u);
+  EXPECT_EQ(s->membranes.counts.lane_batches, 2u * 22u);
+  EXPECT_EQ(s->membranes.counts.plain_cells, 11u);
 }
 
 // Surface and volume of the icosahedron (level 0) against the analytic values
@@ -302,16 +424,17 @@ TEST(OifMembrane, CellSumsAnalytic) {
       for (auto& xi : x)
         xi += Vec3(9.5, 0.5, 5.0); // straddles the x and y faces of a 10^3 box
       oif_test::add_cell_particles(*s, x, 3);
+      const int id = s->add_bonded_interaction(OifOutDirection{});
+      s->add_bonds(id, oif_test::triangle_bond_ids(m, 0, flip), {});
       s->compute_forces(); // folds the positions into the box
-      BondGroup g;
-      g.n_particles = 3;
-      g.ids = oif_test::triangle_bond_ids(m, 0, flip);
-      oif::CellSums sums;
-      sums.compute(g, s->particles, s->box, s->comm);
-      ASSERT_EQ(sums.mol_ids.size(), 1u);
-      EXPECT_EQ(sums.mol_ids[0], 3);
-      EXPECT_EQ(sums.volume[0] > 0.0, !flip);
-      const double area = sums.area[0], volume = std::abs(sums.volume[0]);
+      membrane::Selection select;
+      select.bond_id = id;
+      const auto cells =
+          membrane::analyse(s->bonded, select, s->particles, s->box, s->time, nullptr);
+      ASSERT_EQ(cells.size(), 1u);
+      EXPECT_EQ(cells[0].mol_id, 3);
+      EXPECT_EQ(cells[0].volume > 0.0, !flip);
+      const double area = cells[0].area, volume = std::abs(cells[0].volume);
       if (level == 0) {
         EXPECT_NEAR(area, area_ico, 1e-13 * area_ico);
         EXPECT_NEAR(volume, vol_ico, 1e-13 * vol_ico);

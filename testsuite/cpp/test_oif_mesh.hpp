@@ -3,8 +3,8 @@
 // one OIF cell. Used by test_oif_membrane.cpp and test_force_energy.cpp.
 #pragma once
 
-#include "interactions/bonded/oif_area.hpp"
-#include "interactions/bonded/oif_bending.hpp"
+#include "interactions/membrane/bending.hpp"
+#include "interactions/membrane/membrane_model.hpp"
 #include "system/system.hpp"
 
 #include <Eigen/Geometry>
@@ -108,9 +108,9 @@ inline std::vector<double> angle_references(const Mesh& m, const std::vector<Vec
   for (const auto& an : m.angles) {
     const Vec3 &a = x[an[0]], &b = x[an[1]], &c = x[an[2]], &d = x[an[3]];
     ref.push_back((c - b).norm());
-    ref.push_back(pyoif::oif::dihedral(a, b, c, d).phi);
-    ref.push_back(pyoif::oif::triangle_area(a, b, c));
-    ref.push_back(pyoif::oif::triangle_area(b, c, d));
+    ref.push_back(pyoif::membrane::dihedral_angle(a, b, c, d));
+    ref.push_back(0.5 * (b - a).cross(c - a).norm());
+    ref.push_back(0.5 * (c - b).cross(d - b).norm());
   }
   return ref;
 }
@@ -161,6 +161,18 @@ inline std::vector<Vec3> positions_of(const pyoif::System& s, std::size_t n, int
     x[i] = s.box.unfolded(s.particles.pos[k], s.particles.image[k]);
   }
   return x;
+}
+
+/** (area, oriented volume) of the cells of triangle bond group `bond_id`,
+ *  by the membrane component's analysis (the time step's driver). */
+inline std::vector<std::pair<double, double>> cell_area_volume(pyoif::System& s, int bond_id) {
+  pyoif::membrane::Selection select;
+  select.bond_id = bond_id;
+  std::vector<std::pair<double, double>> out;
+  for (const auto& r :
+       pyoif::membrane::analyse(s.bonded, select, s.particles, s.box, s.time, nullptr))
+    out.emplace_back(r.area, r.volume);
+  return out;
 }
 
 inline void set_positions(pyoif::System& s, const std::vector<Vec3>& x, int id0 = 0) {

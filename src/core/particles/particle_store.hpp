@@ -15,18 +15,18 @@ namespace pyoif {
 struct ParticleStore {
   // --- local particles, index 0 .. n_local()-1 ---------------------------
   std::vector<int> id;
-  std::vector<Vec3> pos;  ///< folded into the box at the last re-sort
-  std::vector<Vec3i> image;  ///< periodic images crossed: unfolded = pos + image * L
+  std::vector<Vec3> pos;    ///< folded into the box at the last re-sort
+  std::vector<Vec3i> image; ///< periodic images crossed: unfolded = pos + image * L
   std::vector<Vec3> vel, force, ext_force;
-  std::vector<Vec3> normal;  ///< outward membrane normal (filled by the normals pass)
+  std::vector<Vec3> normal; ///< outward membrane normal (filled by the normals pass)
   std::vector<double> mass;
   std::vector<int> type, mol_id;
-  std::vector<std::uint8_t> fixed;  ///< bit d set: coordinate d is fixed
+  std::vector<std::uint8_t> fixed; ///< bit d set: coordinate d is fixed
 
   // --- ghosts ---------------------------------------------------------------
   std::vector<Vec3> ghost_pos, ghost_force;
   std::vector<int> ghost_origin;  ///< local index of the particle imaged
-  std::vector<Vec3i> ghost_shift;  ///< image shift in box lengths
+  std::vector<Vec3i> ghost_shift; ///< image shift in box lengths
 
   // --- id -> local index (-1 where none) ------------------------------------
   std::vector<int> index_of_id;
@@ -40,12 +40,15 @@ struct ParticleStore {
     return ++counter;
   }
 
+  /** Changes whenever a mol_id may have changed (writers of mol_id bump it):
+   *  the compiled membranes group their cells by mol_id. */
+  std::uint64_t mol_version = 0;
+
   std::size_t n_local() const { return id.size(); }
   std::size_t n_ghost() const { return ghost_pos.size(); }
 
   int index(int pid) const {
-    return (pid >= 0 && static_cast<std::size_t>(pid) < index_of_id.size()) ? index_of_id[pid]
-                                                                              : -1;
+    return (pid >= 0 && static_cast<std::size_t>(pid) < index_of_id.size()) ? index_of_id[pid] : -1;
   }
   int max_id() const { return static_cast<int>(index_of_id.size()) - 1; }
 
@@ -72,4 +75,4 @@ struct ParticleStore {
   }
 };
 
-}  // namespace pyoif
+} // namespace pyoif

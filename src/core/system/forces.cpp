@@ -18,131 +18,52 @@ void System::prepare_step(int moved) {
     cells.update_ghosts(particles, box);
 }
 
+void System::add_membrane_forces(Energies* e) {
+  membranes.add_forces(bonded, m_bonds_version, particles, box, time);
+  if (!e)
+    return;
+  // energies per bonded interaction: each one's bonds compiled alone and
+  // evaluated by the same driver (analysis, not the time step)
+  for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id)
+    std::visit(
+        [&](const auto& ia) {
+          using IA = std::decay_t<decltype(ia)>;
+          if constexpr (is_membrane_bond<IA>) {
+            membrane::Selection select;
+            select.bond_id = static_cast<int>(bond_id);
+            double energy = 0.0;
+            for (const auto& cell :
+                 membrane::analyse(bonded, select, particles, box, time, nullptr))
+              for (const double term : cell.energy)
+                energy += term;
+            e->bonded += energy;
+            e->bonded_by_id[static_cast<int>(bond_id)] += energy;
+          }
+        },
+        bonded[bond_id].interaction);
+}
+
 void System::add_bonded_forces(Energies* e) {
   auto& p = particles;
-  // The time-step loop (no energies) takes the OIF fast path; it declines
-  // (returns false, particles untouched) whenever the generic loop must speak,
-  // e.g. to name a broken bond. One rank only: its cell sums are not reduced.
-  const bool fast = e == nullptr && bonded_fast_path && comm.size() == 1;
-  const std::size_t n_groups = bonded.size();
-  // per bonded id, this step: evaluated by a fused pass (skipped below), the
-  // OifGlobalForces group whose pass gives an OifOutDirection group's normals
-  // (-1: none), whether a pass wrote the normals of such a group
-  std::vector<char> evaluated, normals_written;
-  std::vector<int> normals_source;
-  if (fast) {
-    m_fast_plans.resize(n_groups);
-    m_fused_plans.resize(n_groups);
-    evaluated.assign(n_groups, 0);
-    normals_written.assign(n_groups, 0);
-    normals_source.assign(n_groups, -1);
-    auto is_global = [&](int i) {
-      return i >= 0 && static_cast<std::size_t>(i) < n_groups &&
-             std::holds_alternative<OifGlobalForces>(bonded[i].interaction);
-    };
-    // An OifOutDirection group over exactly the triangles of an
-    // OifGlobalForces group (an OifCellType's) takes its normals from that
-    // group's pass. Last step's partner first: the comparison is cached.
-    std::vector<int> normals_target(n_groups, -1); // OifGlobalForces id -> that group
-    for (std::size_t j = 0; j < n_groups; ++j) {
-      if (!std::holds_alternative<OifOutDirection>(bonded[j].interaction))
-        continue;
-      oif::FastBondPlan& plan = m_fast_plans[j];
-      auto matches = [&](int i) {
-        return is_global(i) && normals_target[i] < 0 &&
-               plan.same_triangles(bonded[j].bonds, bonded[i].bonds);
-      };
-      int source = matches(plan.normals_source) ? plan.normals_source : -1;
-      for (std::size_t i = 0; i < n_groups && source < 0; ++i)
-        if (matches(static_cast<int>(i)))
-          source = static_cast<int>(i);
-      plan.normals_source = normals_source[j] = source;
-      if (source >= 0)
-        normals_target[source] = static_cast<int>(j);
-    }
-    // An OifLocalForces group over the particles of an OifGlobalForces group
-    // (an OifCellType's) is evaluated together with it, cell by cell, in one
-    // fused pass that also writes the normals; where it declines, each group
-    // takes its own plan in the loop below.
-    for (std::size_t j = 0; j < n_groups; ++j) {
-      const auto* local = std::get_if<OifLocalForces>(&bonded[j].interaction);
-      if (!local)
-        continue;
-      oif::FusedMembranePlan& fused = m_fused_plans[j];
-      auto matches = [&](int i) {
-        return is_global(i) && !evaluated[i] &&
-               fused.same_particles(bonded[j].bonds, bonded[i].bonds);
-      };
-      int partner = matches(fused.partner) ? fused.partner : -1;
-      for (std::size_t i = 0; i < n_groups && partner < 0; ++i)
-        if (matches(static_cast<int>(i)))
-          partner = static_cast<int>(i);
-      fused.partner = partner;
-      if (partner < 0)
-        continue;
-      const bool normals = normals_target[partner] >= 0;
-      if (fused.run(*local, bonded[j].bonds, std::get<OifGlobalForces>(bonded[partner].interaction),
-                    bonded[partner].bonds, normals, p, box)) {
-        evaluated[j] = evaluated[partner] = 1;
-        normals_written[partner] = normals;
-      }
-    }
-    // a lone OifGlobalForces plan writes the normals when its pass comes
-    // before the OifOutDirection group's
-    for (std::size_t i = 0; i < n_groups; ++i)
-      m_fast_plans[i].write_normals = normals_target[i] > static_cast<int>(i);
-  }
-  // Outside the fast path (several ranks, energies): the cell sums of every
-  // OifGlobalForces group first, all cell types together, so that a parallel
-  // run makes one reduction per step for all cells instead of one per type;
-  // with them those of the OifOutDirection groups (their normals' orientation),
-  // so that no rank makes a reduction of its own later.
-  std::vector<char> summed; // per bonded id: its cell sums are done (empty: none)
-  if (!fast) {
-    summed.assign(n_groups, 0);
-    std::vector<std::pair<const BondGroup*, oif::CellSums*>> jobs;
-    for (std::size_t i = 0; i < n_groups; ++i)
-      std::visit(
-          [&](auto& ia) {
-            using IA = std::decay_t<decltype(ia)>;
-            if constexpr (std::is_same_v<IA, OifGlobalForces> ||
-                          std::is_same_v<IA, OifOutDirection>) {
-              jobs.emplace_back(&bonded[i].bonds, &ia.sums);
-              summed[i] = 1;
-            }
-          },
-          bonded[i].interaction);
-    if (!jobs.empty())
-      oif::CellSums::compute_all(jobs, p, box, comm);
-  }
-  for (std::size_t bond_id = 0; bond_id < n_groups; ++bond_id) {
-    if (fast && evaluated[bond_id])
-      continue;
+  for (std::size_t bond_id = 0; bond_id < bonded.size(); ++bond_id) {
     BondedEntry& entry = bonded[bond_id];
     std::visit(
-        [&](auto& ia) {
+        [&](const auto& ia) {
           using IA = std::decay_t<decltype(ia)>;
-          if constexpr (std::is_same_v<IA, OifOutDirection>)
-            if (fast && normals_source[bond_id] >= 0 && normals_written[normals_source[bond_id]])
-              return;
-          if constexpr (oif::has_fast_path<IA>)
-            if (fast && m_fast_plans[bond_id].run(ia, entry.bonds, p, box)) {
-              normals_written[bond_id] = m_fast_plans[bond_id].normals_written();
-              return;
+          if constexpr (!is_membrane_bond<IA>) {
+            double energy_sum = 0.0;
+            for_each_bond(
+                ia, entry.bonds, p, box, time,
+                [&](const auto& idx, const auto& f, double energy, const auto&) {
+                  for (std::size_t k = 0; k < idx.size(); ++k)
+                    p.force[idx[k]] += f[k];
+                  energy_sum += energy;
+                },
+                e != nullptr);
+            if (e) {
+              e->bonded += energy_sum;
+              e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;
             }
-          prepare_bonds(ia, entry.bonds, p, box, comm, !summed.empty() && summed[bond_id]);
-          double energy_sum = 0.0;
-          for_each_bond(
-              ia, entry.bonds, p, box, time,
-              [&](const auto& idx, const auto& f, double energy, const auto&) {
-                for (std::size_t k = 0; k < idx.size(); ++k)
-                  p.force[idx[k]] += f[k];
-                energy_sum += energy;
-              },
-              e != nullptr);
-          if (e) {
-            e->bonded += energy_sum;
-            e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;
           }
         },
         entry.interaction);
@@ -266,6 +187,8 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
   RunTimings untimed;
   RunTimings& t = timings ? *timings : untimed;
   PhaseClock clock(timings != nullptr);
+  add_membrane_forces(e);
+  clock.lap(t.membrane);
   add_bonded_forces(e);
   clock.lap(t.bonded);
   add_nonbonded_forces(e);

@@ -87,7 +87,7 @@ void System::remove_particle(int pid) {
     g = std::move(kept);
   }
   cells.invalidate();
-  invalidate_forces();
+  bonds_changed();
 }
 
 void System::clear_particles() {
@@ -98,7 +98,7 @@ void System::clear_particles() {
     entry.bonds.per_bond.clear();
   }
   cells.invalidate();
-  invalidate_forces();
+  bonds_changed();
 }
 
 void System::check_position_range(const Vec3& pos, int pid) const {
@@ -129,7 +129,7 @@ int System::add_bonded_interaction(const BondedInteraction& ia) {
       },
       ia);
   bonded.push_back(std::move(entry));
-  invalidate_forces();
+  bonds_changed();
   return static_cast<int>(bonded.size()) - 1;
 }
 
@@ -158,7 +158,24 @@ void System::add_bonds(int bond_id, const std::vector<int>& ids,
     }
   g.ids.insert(g.ids.end(), ids.begin(), ids.end());
   g.per_bond.insert(g.per_bond.end(), per_bond.begin(), per_bond.end());
-  invalidate_forces();
+  bonds_changed();
+}
+
+bool System::remove_bond(int bond_id, const std::vector<int>& ids) {
+  if (bond_id < 0 || bond_id >= static_cast<int>(bonded.size()))
+    throw InputError("bond: bonded interaction " + std::to_string(bond_id) + " is not registered");
+  BondGroup& g = bonded[bond_id].bonds;
+  for (std::size_t b = 0; b < g.size(); ++b)
+    if (ids.size() == static_cast<std::size_t>(g.n_particles) &&
+        std::equal(ids.begin(), ids.end(), g.bond(b))) {
+      g.ids.erase(g.ids.begin() + b * g.n_particles, g.ids.begin() + (b + 1) * g.n_particles);
+      if (g.per_bond_stride)
+        g.per_bond.erase(g.per_bond.begin() + b * g.per_bond_stride,
+                         g.per_bond.begin() + (b + 1) * g.per_bond_stride);
+      bonds_changed();
+      return true;
+    }
+  return false;
 }
 
 void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {

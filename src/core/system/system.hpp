@@ -7,7 +7,7 @@
 #include "constraints/shape_based_constraint.hpp"
 #include "interactions/bonded/bond_group.hpp"
 #include "interactions/bonded/bonded_registry.hpp"
-#include "interactions/bonded/oif_fast_path.hpp"
+#include "interactions/membrane/membrane_model.hpp"
 #include "interactions/nonbonded/nonbonded_table.hpp"
 #include "lb/lb_coupling.hpp"
 #include "lb/lb_fluid.hpp"
@@ -33,12 +33,6 @@ struct LangevinParams {
 struct LBCouplingState {
   bool active = false;
   lb::CouplingParams params;
-};
-
-/** One registered bonded interaction and its bonds. */
-struct BondedEntry {
-  BondedInteraction interaction;
-  BondGroup bonds;
 };
 
 struct Energies {
@@ -114,9 +108,22 @@ public:
   /** Adds bonds of interaction `bond_id`: ids is n_bonds * n_particles ids,
    *  per_bond the per-bond reference values (or empty). */
   void add_bonds(int bond_id, const std::vector<int>& ids, const std::vector<double>& per_bond);
-  /** The time-step loop evaluates the OIF bond groups with the compiled fast
-   *  path (oif_fast_path.hpp); false: the generic bond loop (tests compare). */
-  bool bonded_fast_path = true;
+  /** Removes the first bond of interaction `bond_id` with exactly these
+   *  particle ids; false if there is none. */
+  bool remove_bond(int bond_id, const std::vector<int>& ids);
+  /** Counts every change of the bonds (added, removed, interactions
+   *  registered): the compiled membranes are kept while it stays. Code that
+   *  writes `bonded` directly must call bonds_changed(). */
+  std::uint64_t bonds_version() const { return m_bonds_version; }
+  void bonds_changed() {
+    ++m_bonds_version;
+    invalidate_forces();
+  }
+  /** The membrane component: every OIF bond compiled into cells and
+   *  evaluated by one driver (interactions/membrane/membrane_model.hpp);
+   *  `membranes.lanes` chooses four cells per vector lane (default) or one
+   *  at a time, `membranes.counts` counts which ran. */
+  membrane::Membranes membranes;
   const std::vector<std::shared_ptr<ShapeBasedConstraint>>& constraints() const {
     return m_constraints;
   }
@@ -169,8 +176,8 @@ public:
    *  counted. Seven clock reads per step: nothing against a step's cost. */
   struct RunTimings {
     std::uint64_t steps = 0;
-    double total = 0.0, bonded = 0.0, non_bonded = 0.0, constraints = 0.0, coupling = 0.0,
-           lb_fluid = 0.0;
+    double total = 0.0, membrane = 0.0, bonded = 0.0, non_bonded = 0.0, constraints = 0.0,
+           coupling = 0.0, lb_fluid = 0.0;
   };
   RunTimings run_timings;
   /** Recompute all forces for the current positions (no time advance). */
@@ -194,6 +201,10 @@ private:
    *  phases' time is added (the time steps of a run), or none. */
   template <bool with_energy>
   void force_loop(Energies* e, bool forces_preset = false, RunTimings* timings = nullptr);
+  /** The membrane phase: every OIF bond through the membrane component
+   *  (forces, node normals; with e the energies per bonded interaction). */
+  void add_membrane_forces(Energies* e);
+  /** The generic bonds (bond_loop.hpp). */
   void add_bonded_forces(Energies* e);
   void add_nonbonded_forces(Energies* e);
   void add_constraint_forces(Energies* e);
@@ -217,11 +228,8 @@ private:
     m_fluid_version_of_forces = m_lb ? m_lb->state_version() : 0;
     m_shape_version_of_forces = constraint_shape_version();
   }
-  std::vector<oif::FastBondPlan> m_fast_plans; ///< per bonded interaction id
-  std::vector<double> m_constraint_dist;       ///< per particle, one constraint at a time
-  /** Per OifLocalForces id: that group fused with its cell type's
-   *  OifGlobalForces group (add_bonded_forces). */
-  std::vector<oif::FusedMembranePlan> m_fused_plans;
+  std::vector<double> m_constraint_dist; ///< per particle, one constraint at a time
+  std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;
   int m_lb_substep = 0;

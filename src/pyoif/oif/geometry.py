@@ -7,6 +7,7 @@ corners, and its size is the one of PyOIF's ``angle_btw_triangles``
 (pi for a flat pair, in (0, 2 pi)).
 """
 import numpy as np
+from lbmd import _lbmd
 
 from .mesh_io import signed_volume
 
@@ -34,15 +35,12 @@ def volume(nodes, tris):
 
 def dihedral_angles(nodes, angles):
     """PyOIF's angle between triangles (P2, P1, P3) and (P2, P3, P4) for rows
-    (P1, P2, P3, P4): pi minus the angle between the normals, mirrored to
-    2 pi - phi when P4 lies on the negative side of the first triangle."""
-    p1, p2, p3, p4 = (nodes[angles[:, i]] for i in range(4))
-    n1 = np.cross(p1 - p2, p3 - p2)
-    n2 = np.cross(p3 - p2, p4 - p2)
-    cos = np.einsum("ij,ij->i", n1, n2) / (np.linalg.norm(n1, axis=1) * np.linalg.norm(n2, axis=1))
-    phi = np.pi - np.arccos(np.clip(cos, -1.0, 1.0))
-    side = np.einsum("ij,ij->i", n1, p4 - p1)
-    return np.where(side < 0, 2.0 * np.pi - phi, phi)
+    (P1, P2, P3, P4): pi for a flat pair, below pi when P4 lies on the side of
+    (P1 - P2) x (P3 - P2), in [0, 2 pi). Computed by the engine's membrane
+    component, the function its bending force (eq. 4) measures angles with, so
+    that a relaxed mesh is exactly at its reference angles."""
+    return _lbmd.membrane_angles(np.ascontiguousarray(nodes, dtype=float),
+                                 np.ascontiguousarray(angles, dtype=np.int32))
 
 
 def edge_lengths(nodes, edges):

@@ -104,9 +104,6 @@ void bind_interactions(py::module_& m) {
   py::class_<OifOutDirection>(m, "OifOutDirection").def(py::init<>());
 
   sys.def("add_bonded_interaction", &System::add_bonded_interaction)
-      .def_readwrite("bonded_fast_path", &System::bonded_fast_path,
-                     "The time-step loop evaluates the OIF bonds with the compiled fast path "
-                     "(default); False: the generic bond loop (for comparisons).")
       .def("n_bonded_interactions", [](const System& s) { return s.bonded.size(); })
       .def("add_bonds",
            [](System& s, int bond_id, const IdArray& ids, const RealArray& per_bond) {
@@ -131,19 +128,7 @@ void bind_interactions(py::module_& m) {
              std::copy(g.ids.begin(), g.ids.end(), out.mutable_data());
              return out;
            })
-      .def("remove_bond", [](System& s, int bond_id, const std::vector<int>& ids) {
-        BondGroup& g = s.bonded.at(bond_id).bonds;
-        for (std::size_t b = 0; b < g.size(); ++b)
-          if (std::equal(ids.begin(), ids.end(), g.bond(b))) {
-            g.ids.erase(g.ids.begin() + b * g.n_particles, g.ids.begin() + (b + 1) * g.n_particles);
-            if (g.per_bond_stride)
-              g.per_bond.erase(g.per_bond.begin() + b * g.per_bond_stride,
-                               g.per_bond.begin() + (b + 1) * g.per_bond_stride);
-            s.invalidate_forces(); // the next run recomputes them (and the plans)
-            return true;
-          }
-        return false;
-      });
+      .def("remove_bond", &System::remove_bond);
 
   // ---- shapes (base) and constraints ----------------------------------------
   py::class_<shapes::Shape, std::shared_ptr<shapes::Shape>>(m, "Shape")

@@ -3,7 +3,8 @@
 // forces per modulus), all without per-particle Python.
 #include "bindings.hpp"
 
-#include "interactions/bonded/bond_loop.hpp"
+#include "interactions/membrane/bending.hpp"
+#include "interactions/membrane/membrane_model.hpp"
 #include "system/system.hpp"
 #include "utils/errors.hpp"
 
@@ -11,7 +12,6 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
-#include <map>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -25,143 +25,126 @@ namespace {
 using IdArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-template <class IA> constexpr bool is_oif_analysable() {
-  return std::is_same_v<IA, OifLocalForces> || std::is_same_v<IA, OifGlobalForces>;
-}
-
-BondedEntry& entry_of(System& s, int bond_id) {
-  if (bond_id < 0 || bond_id >= static_cast<int>(s.bonded.size()))
-    throw InputError("bond_id: bonded interaction " + std::to_string(bond_id) +
-                     " is not registered");
-  return s.bonded[bond_id];
-}
-
 template <class T> py::array_t<T> to_array(const std::vector<T>& v) {
   py::array_t<T> out(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), out.mutable_data());
   return out;
 }
 
-/** The bonds of one cell (mol_id of a bond's first particle; bonds whose
- *  first particle is missing stay, so that the bond loop names them), so
- *  that the analysis of one cell costs that cell's bonds, not its type's. */
-BondGroup bonds_of_cell(const BondGroup& group, const ParticleStore& p, int mol_id) {
-  BondGroup out;
-  out.n_particles = group.n_particles;
-  out.per_bond_stride = group.per_bond_stride;
-  for (std::size_t b = 0; b < group.size(); ++b) {
-    const int i = p.index(group.bond(b)[0]);
-    if (i >= 0 && p.mol_id[i] != mol_id)
-      continue;
-    out.ids.insert(out.ids.end(), group.bond(b), group.bond(b) + group.n_particles);
-    if (group.per_bond_stride)
-      out.per_bond.insert(out.per_bond.end(), group.reference(b),
-                          group.reference(b) + group.per_bond_stride);
+/** Checks that bond_id is a registered interaction of one of the Kinds
+ *  (`what`: how the message names them, default their names). */
+template <class... Kinds>
+void check_kind(const System& s, const char* caller, int bond_id, std::string what = "") {
+  if (bond_id < 0 || bond_id >= static_cast<int>(s.bonded.size()))
+    throw InputError("bond_id: bonded interaction " + std::to_string(bond_id) +
+                     " is not registered");
+  if (!(std::holds_alternative<Kinds>(s.bonded[bond_id].interaction) || ...)) {
+    if (what.empty())
+      ((what += (what.empty() ? "" : " or ") + std::string(Kinds::name)), ...);
+    throw InputError(std::string(caller) + ": bonded interaction " + std::to_string(bond_id) +
+                     " is not " + what);
   }
-  return out;
 }
 
-/** The group's bonds, or with mol_id >= 0 those of that cell only. */
-const BondGroup& selected_bonds(const BondedEntry& entry, const ParticleStore& p, int mol_id,
-                                BondGroup& storage) {
-  if (mol_id < 0)
-    return entry.bonds;
-  storage = bonds_of_cell(entry.bonds, p, mol_id);
-  return storage;
+/** One interaction's bonds (with mol_id >= 0 that cell's only, at the cost
+ *  of that cell), one term's moduli (term >= 0). */
+membrane::Selection selection(int bond_id, int mol_id, int term) {
+  membrane::Selection select;
+  select.bond_id = bond_id;
+  select.mol_id = mol_id;
+  select.term = term;
+  return select;
 }
 
-/** Sum of the bonds' energies per cell (mol_id of each bond's first particle). */
-template <class IA>
-std::map<int, double> energy_per_cell(System& s, IA ia, const BondGroup& group) {
-  prepare_bonds(ia, group, s.particles, s.box, s.comm);
-  std::map<int, double> e;
-  for_each_bond(
-      ia, group, s.particles, s.box, s.time,
-      [&](const auto&, const auto&, double energy, const auto& in) { e[in.mol_id] += energy; });
-  return e;
+/** The analysis of the selected bonds, compiled and evaluated by the
+ *  membrane component's driver, the time step's. */
+std::vector<membrane::CellReport> analyse(System& s, const membrane::Selection& select) {
+  return membrane::analyse(s.bonded, select, s.particles, s.box, s.time, nullptr);
 }
 
 py::tuple cell_sums(System& s, int bond_id) {
-  BondedEntry& entry = entry_of(s, bond_id);
-  if (entry.bonds.n_particles != 3 || std::holds_alternative<HarmonicBond>(entry.interaction))
-    throw InputError("oif_cell_sums: bonded interaction " + std::to_string(bond_id) +
-                     " is not a triangle bond (OifGlobalForces or OifOutDirection)");
-  oif::CellSums sums;
-  sums.compute(entry.bonds, s.particles, s.box, s.comm);
-  std::vector<double> volume(sums.volume.size());
-  std::transform(sums.volume.begin(), sums.volume.end(), volume.begin(),
-                 [](double v) { return std::abs(v); });
-  return py::make_tuple(to_array(sums.mol_ids), to_array(sums.area), to_array(volume));
+  check_kind<OifGlobalForces, OifOutDirection>(
+      s, "oif_cell_sums", bond_id, "a triangle bond (OifGlobalForces or OifOutDirection)");
+  const auto reports = analyse(s, selection(bond_id, -1, -1));
+  std::vector<int> mols;
+  std::vector<double> areas, volumes;
+  for (const auto& r : reports) {
+    mols.push_back(r.mol_id);
+    areas.push_back(r.area);
+    volumes.push_back(std::abs(r.volume));
+  }
+  return py::make_tuple(to_array(mols), to_array(areas), to_array(volumes));
 }
 
 py::dict energies(System& s, int bond_id, int mol_id) {
-  BondedEntry& entry = entry_of(s, bond_id);
-  BondGroup storage;
-  const BondGroup& bonds = selected_bonds(entry, s.particles, mol_id, storage);
+  check_kind<OifLocalForces, OifGlobalForces>(s, "oif_energies", bond_id);
+  const auto reports = analyse(s, selection(bond_id, mol_id, -1));
+  const bool local = std::holds_alternative<OifLocalForces>(s.bonded[bond_id].interaction);
+  const std::vector<int> terms =
+      local ? std::vector<int>{membrane::stretching, membrane::bending, membrane::local_area}
+            : std::vector<int>{membrane::global_area, membrane::volume};
+  std::vector<int> mols;
+  for (const auto& r : reports)
+    mols.push_back(r.mol_id);
   py::dict out;
-  std::visit(
-      [&](const auto& ia) {
-        using IA = std::decay_t<decltype(ia)>;
-        if constexpr (is_oif_analysable<IA>()) {
-          for (const std::string& term : IA::energy_terms()) {
-            const auto e = energy_per_cell(s, ia.only(term), bonds);
-            std::vector<int> mols;
-            std::vector<double> values;
-            for (const auto& [mol, value] : e) {
-              mols.push_back(mol);
-              values.push_back(value);
-            }
-            out[py::str(term)] = py::make_tuple(to_array(mols), to_array(values));
-          }
-        } else {
-          throw InputError("oif_energies: bonded interaction " + std::to_string(bond_id) + " (" +
-                           IA::name + ") is not OifLocalForces or OifGlobalForces");
-        }
-      },
-      entry.interaction);
+  for (const int term : terms) {
+    std::vector<double> values;
+    for (const auto& r : reports)
+      values.push_back(r.energy[term]);
+    out[py::str(membrane::term_name(term))] = py::make_tuple(to_array(mols), to_array(values));
+  }
   return out;
 }
 
 py::tuple forces(System& s, int bond_id, const std::string& term, int mol_id) {
-  BondedEntry& entry = entry_of(s, bond_id);
-  BondGroup storage;
-  const BondGroup& bonds = selected_bonds(entry, s.particles, mol_id, storage);
+  check_kind<OifLocalForces, OifGlobalForces>(s, "oif_forces", bond_id);
+  const int which = membrane::term_of(term);
+  const bool local_term = which == membrane::stretching || which == membrane::bending ||
+                          which == membrane::local_area || which == membrane::viscosity;
+  if (std::holds_alternative<OifGlobalForces>(s.bonded[bond_id].interaction) && local_term)
+    throw InputError("term: OifGlobalForces has the terms 'global_area' and 'volume', got '" +
+                     term + "'");
+  if (std::holds_alternative<OifLocalForces>(s.bonded[bond_id].interaction) && !local_term)
+    throw InputError("term: OifLocalForces has the terms 'stretching', 'bending', 'local_area' "
+                     "and 'visc', got '" +
+                     term + "'");
   const ParticleStore& p = s.particles;
+  membrane::Model model;
+  model.compile(s.bonded, selection(bond_id, mol_id, which), p);
   std::vector<Vec3> f(p.n_local(), Vec3::Zero());
-  std::vector<char> touched(p.n_local(), 0);
-  std::visit(
-      [&](const auto& ia) {
-        using IA = std::decay_t<decltype(ia)>;
-        if constexpr (is_oif_analysable<IA>()) {
-          IA one = ia.only(term);
-          prepare_bonds(one, bonds, s.particles, s.box, s.comm);
-          for_each_bond(one, bonds, p, s.box, s.time,
-                        [&](const auto& idx, const auto& fb, double, const auto&) {
-                          for (std::size_t k = 0; k < idx.size(); ++k) {
-                            f[idx[k]] += fb[k];
-                            touched[idx[k]] = 1;
-                          }
-                        });
-        } else {
-          throw InputError("oif_forces: bonded interaction " + std::to_string(bond_id) + " (" +
-                           IA::name + ") is not OifLocalForces or OifGlobalForces");
-        }
-      },
-      entry.interaction);
-  std::vector<std::pair<int, int>> order; // (id, local index)
-  for (std::size_t i = 0; i < touched.size(); ++i)
-    if (touched[i])
-      order.emplace_back(p.id[i], static_cast<int>(i));
-  std::sort(order.begin(), order.end());
-  IdArray ids(static_cast<py::ssize_t>(order.size()));
-  RealArray out({static_cast<py::ssize_t>(order.size()), py::ssize_t{3}});
+  membrane::PassCounts counts;
+  model.evaluate(p, s.box, s.time, f.data(), nullptr, nullptr, counts);
+  // the nodes of the selected cells, in id order
+  const auto nodes = model.nodes_by_id(p);
+  IdArray out_ids(static_cast<py::ssize_t>(nodes.size()));
+  RealArray out({static_cast<py::ssize_t>(nodes.size()), py::ssize_t{3}});
   auto w = out.mutable_unchecked<2>();
-  for (std::size_t n = 0; n < order.size(); ++n) {
-    ids.mutable_data()[n] = order[n].first;
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    out_ids.mutable_data()[n] = nodes[n].first;
     for (int d = 0; d < 3; ++d)
-      w(n, d) = f[order[n].second][d];
+      w(n, d) = f[nodes[n].second][d];
   }
-  return py::make_tuple(ids, out);
+  return py::make_tuple(out_ids, out);
+}
+
+py::array_t<double> angles(const RealArray& nodes, const IdArray& rows) {
+  if (nodes.ndim() != 2 || nodes.shape(1) != 3)
+    throw InputError("membrane_angles: nodes must be an N×3 array");
+  if (rows.ndim() != 2 || rows.shape(1) != 4)
+    throw InputError("membrane_angles: angles must be an M×4 array of node indices (A, B, C, D)");
+  auto x = nodes.unchecked<2>();
+  auto r = rows.unchecked<2>();
+  py::array_t<double> out(r.shape(0));
+  auto node = [&](py::ssize_t k, int j) {
+    const int i = r(k, j);
+    if (i < 0 || i >= x.shape(0))
+      throw InputError("membrane_angles: node index " + std::to_string(i) + " out of range");
+    return Vec3(x(i, 0), x(i, 1), x(i, 2));
+  };
+  for (py::ssize_t k = 0; k < r.shape(0); ++k)
+    out.mutable_data()[k] =
+        membrane::dihedral_angle(node(k, 0), node(k, 1), node(k, 2), node(k, 3));
+  return out;
 }
 
 void add_exclusions(System& s, const IdArray& pairs) {
@@ -195,7 +178,32 @@ void bind_oif(py::module_& m) {
            "(mol_id >= 0: of that cell's bonds only).")
       .def("oif_forces", &forces, py::arg("bond_id"), py::arg("term"), py::arg("mol_id") = -1,
            "(ids, N×3 forces) of one modulus of an OIF bond group (mol_id >= 0: of that cell's "
-           "bonds only); particle forces untouched.");
+           "bonds only); particle forces untouched.")
+      .def_property(
+          "membrane_lanes", [](const System& s) { return s.membranes.lanes; },
+          [](System& s, bool lanes) { s.membranes.lanes = lanes; },
+          "The membrane pass evaluates four cells of a type at once, one per vector lane "
+          "(default); False: every cell alone (the same forces bit for bit).")
+      .def(
+          "membrane_counts",
+          [](const System& s) {
+            const membrane::PassCounts& c = s.membranes.counts;
+            py::dict d;
+            d["compiles"] = c.compiles;
+            d["lane_batches"] = c.lane_batches;
+            d["padded_lanes"] = c.padded_lanes;
+            d["plain_cells"] = c.plain_cells;
+            return d;
+          },
+          "How often the membrane pass compiled its tables and evaluated cells in vector "
+          "lanes (batches of four) or alone, since the System was made.")
+      .def(
+          "membrane_invalidate", [](System& s) { s.membranes.invalidate(); },
+          "Drop the compiled membrane tables (the next force calculation compiles anew).");
+  m.def("membrane_angles", &angles, py::arg("nodes"), py::arg("angles"),
+        "PyOIF's angle between the triangles (A, B, C) and (B, C, D) for rows (A, B, C, D) of "
+        "node indices: the reference angles phi0 of a relaxed mesh, by the membrane "
+        "component's own function.");
 }
 
 } // namespace pyoif::python

@@ -211,6 +211,7 @@ void set_scalars(System& s, const std::string& field, const IdArray& ids, const 
       break;
     case Scalar::mol_id:
       p.mol_id[i] = static_cast<int>(x);
+      ++p.mol_version; // the membranes regroup their cells
       break;
     case Scalar::fix:
       p.fixed[i] = static_cast<std::uint8_t>(x);
@@ -321,6 +322,7 @@ void bind_system(py::module_& m) {
              py::dict d;
              d["steps"] = t.steps;
              d["total"] = t.total;
+             d["membrane"] = t.membrane;
              d["bonded"] = t.bonded;
              d["non_bonded"] = t.non_bonded;
              d["constraints"] = t.constraints;

@@ -49,7 +49,8 @@ class CellSystem:
         return self._system._core.n_rebuilds
 
 
-_TIMED_PHASES = (("bonded", "bonded: membrane moduli, bonds"),
+_TIMED_PHASES = (("membrane", "membrane: the cells' elastic moduli"),
+                 ("bonded", "bonded: other bonds"),
                  ("non_bonded", "non-bonded: pair contacts"),
                  ("constraints", "constraints: walls"),
                  ("coupling", "thermostat: fluid coupling or Langevin"),
@@ -81,7 +82,8 @@ class Integrator:
         """Where the time of the runs went, summed over all ``run()`` calls
         since the System was made or since ``reset_timings()``: a dict of
         wall-clock seconds, 'total' (all of ``run()``) and its parts
-        'bonded' (membrane moduli, bonds), 'non_bonded' (pair contacts),
+        'membrane' (the cells' elastic moduli), 'bonded' (other bonds),
+        'non_bonded' (pair contacts),
         'constraints' (walls), 'coupling' (thermostat: particle-fluid
         coupling or Langevin forces), 'lb_fluid' (the lattice update) and
         'other' (velocity Verlet, neighbour lists, checks); 'steps': the

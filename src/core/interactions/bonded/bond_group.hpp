@@ -9,10 +9,10 @@
 namespace pyoif {
 
 struct BondGroup {
-  int n_particles = 2;              ///< particles per bond (owner first)
-  int per_bond_stride = 0;          ///< reference values per bond
-  std::vector<int> ids;             ///< n_particles * n_bonds particle ids
-  std::vector<double> per_bond;     ///< per_bond_stride * n_bonds values
+  int n_particles = 2;          ///< particles per bond (owner first)
+  int per_bond_stride = 0;      ///< reference values per bond
+  std::vector<int> ids;         ///< n_particles * n_bonds particle ids
+  std::vector<double> per_bond; ///< per_bond_stride * n_bonds values
 
   std::size_t size() const { return n_particles ? ids.size() / n_particles : 0; }
   const int* bond(std::size_t b) const { return ids.data() + b * n_particles; }
@@ -21,4 +21,4 @@ struct BondGroup {
   }
 };
 
-}  // namespace pyoif
+} // namespace pyoif

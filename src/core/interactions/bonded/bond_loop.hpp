@@ -1,11 +1,10 @@
-// The generic bond loop, written once for every bonded interaction: gathers
-// the bond's particles (minimum image relative to the first), calls the
-// interaction's forces(), hands the result to a sink (adding forces, or
-// summing energies per cell, ...). Interactions that need a pass over all
-// their bonds first (per-cell area/volume sums, node normals) define prepare().
+// The generic bond loop, written once for every generic bonded interaction
+// (the membrane bonds are compiled into the membrane component instead):
+// gathers the bond's particles (minimum image relative to the first), calls
+// the interaction's forces(), hands the result to a sink (adding forces, or
+// summing energies, ...).
 #pragma once
 
-#include "communication/communicator.hpp"
 #include "interactions/bonded/bond_group.hpp"
 #include "particles/particle_store.hpp"
 #include "system/box_geometry.hpp"
@@ -13,7 +12,6 @@
 
 #include <array>
 #include <sstream>
-#include <type_traits>
 
 namespace pyoif {
 
@@ -26,27 +24,6 @@ template <int K> struct BondInput {
   std::size_t bond_index = 0;
   bool want_energy = true; ///< false in the time-step loop: energies may be skipped
 };
-
-namespace detail {
-template <class IA, class = void> struct has_prepare : std::false_type {};
-template <class IA>
-struct has_prepare<
-    IA, std::void_t<decltype(std::declval<IA&>().prepare(
-            std::declval<const BondGroup&>(), std::declval<ParticleStore&>(),
-            std::declval<const BoxGeometry&>(), std::declval<const Communicator&>(), false))>>
-    : std::true_type {};
-} // namespace detail
-
-/** Run the interaction's prepare() if it has one: a pass over all its bonds
- *  before any force (per-cell sums, node normals written to p.normal).
- *  sums_ready: the interaction's cell sums were computed for this step
- *  already (the force loop sums all groups with one reduction). */
-template <class IA>
-void prepare_bonds(IA& ia, const BondGroup& group, ParticleStore& p, const BoxGeometry& box,
-                   const Communicator& comm, bool sums_ready = false) {
-  if constexpr (detail::has_prepare<IA>::value)
-    ia.prepare(group, p, box, comm, sums_ready);
-}
 
 /** Visit every bond: sink(local_indices, forces, energy, input). With
  *  want_energy false (the time-step loop) interactions may skip their energy. */

@@ -31,4 +31,4 @@ struct HarmonicBond {
   }
 };
 
-}  // namespace pyoif
+} // namespace pyoif

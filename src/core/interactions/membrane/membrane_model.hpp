@@ -1,0 +1,208 @@
+// The membrane component: every OIF membrane term (interactions/membrane/*.hpp:
+// one parameter struct and one kernel per term, templated over the scalar
+// type) evaluated cell by cell, by one driver, for the time step and for
+// analysis alike.
+//
+// The OIF bonds (oif_bonds.hpp) are descriptions. compile() turns them into
+//  - topologies: the tables of one kind of cell, as cell-local node numbers
+//    (the cell's particle ids in increasing order), with the reference values
+//    and moduli per edge and per triangle; cells with bit-for-bit the same
+//    tables (the cells of an OifCellType) share one copy, which the pass then
+//    reads from L1/L2 for every cell;
+//  - cells: a mol_id, its topology, its nodes' local particle indices, and its
+//    global-area and volume parameters;
+//  - groups: the order of evaluation, four cells of one topology at a time,
+//    one cell per vector lane (T = Lanes), or one cell (T = double).
+// A cell is the mol_id of a bond's first particle (the bond's owner): an
+// OifCellType's three interactions over one cell become one cell record, so
+// its nodes are gathered once and each triangle is visited once for the local
+// area (eq. 5), the cell's area and volume (eqs. 6, 7) and the node normals.
+//
+// One evaluation (evaluate()), per group: gather the nodes' positions
+// (unfolded, relative to the cell's first node: exact for a cell of any size,
+// no minimum image per bond; a cell's nodes must have continuous unfolded
+// positions, as the integrator keeps them), the triangle pass, the cell's
+// factors of eqs. 6 and 7, the area forces, the edge pass (stretching,
+// viscosity, bending), then add the forces to the particles and write the
+// normals; with reports, also each cell's area, volume and energy per term.
+// A degenerate element or a non-finite force stops with a
+// SimulationInstability naming the cell, the particles and the time.
+//
+// Ownership under MPI (doc/architecture.md): a cell is evaluated whole, by
+// one rank; this data layout (cells of gathered node arrays in, node forces
+// and normals out) is what that model needs.
+#pragma once
+
+#include "interactions/bonded/bonded_registry.hpp"
+#include "interactions/membrane/lanes.hpp"
+#include "particles/particle_store.hpp"
+#include "system/box_geometry.hpp"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pyoif::membrane {
+
+/** The membrane terms, for analysis (energies per term, forces of one term). */
+enum Term : int { stretching, bending, local_area, global_area, volume, viscosity, n_terms };
+/** Their names as the Python API spells them. */
+const char* term_name(int term);
+/** The term of a name, -1 for none; InputError for an unknown name. */
+int term_of(const std::string& name);
+
+/** What the evaluation of one cell reports (analysis). */
+struct CellReport {
+  int mol_id = 0;
+  double area = 0.0;   ///< of its OifGlobalForces (else OifOutDirection) triangles
+  double volume = 0.0; ///< oriented: > 0 for outward triangle order
+  std::array<double, n_terms> energy{};
+};
+
+/** Which bonds to compile, and how. */
+struct Selection {
+  int bond_id = -1;  ///< only this bonded interaction's bonds (-1: all membrane bonds)
+  int mol_id = -1;   ///< only this cell's bonds (-1: all cells)
+  int term = -1;     ///< only this term's moduli (-1: all)
+  bool lanes = true; ///< batches of four cells per vector lane where a topology has them
+};
+
+/** Counters of the evaluations, so that tests see which path ran. */
+struct PassCounts {
+  std::uint64_t compiles = 0;     ///< tables built from the bonds
+  std::uint64_t lane_batches = 0; ///< groups of four cells evaluated in vector lanes
+  std::uint64_t padded_lanes = 0; ///< lanes of those groups that repeat a cell
+  std::uint64_t plain_cells = 0;  ///< cells evaluated one at a time
+};
+
+/** The shape tables of one kind of cell (see the file comment). */
+struct Topology {
+  int n_nodes = 0;
+  int origin = 0; ///< cell-local node of the volume's reference point
+  // triangles: vertices; eq. 5's sums over the local bonds that have the
+  // triangle (area.hpp); whether it is one of the cell's closed surface
+  // (OifGlobalForces, or OifOutDirection without those: area, volume and
+  // orientation) and of its normals (OifOutDirection)
+  std::vector<int> tri_v0, tri_v1, tri_v2;
+  std::vector<double> kal_weight, kal_area0, closed_weight, normal_weight;
+  // edges: the local bonds (B, A, C, D), edge BC, wings A and D, with their
+  // reference values (relaxed length; relaxed angle as psi0 = pi - phi0) and moduli
+  std::vector<int> edge_b, edge_a, edge_c, edge_d;
+  std::vector<double> r0, inv_r0, cos_psi0, sin_psi0, ks, kslin, kb, kvisc;
+  std::vector<std::uint8_t> has_normal; ///< per node: in a normals triangle
+  // the terms that occur: the pass's instantiation
+  bool neo = false, visc = false, bend = false;
+  bool edges = false;         ///< an edge term is on (the edge pass runs)
+  bool local_area = false;    ///< eq. 5 on some triangle
+  bool closed = false;        ///< a closed surface: area, volume, orientation
+  bool normals = false;       ///< node normals
+  bool separate_sums = false; ///< closed and normal triangles differ: two node sums
+};
+
+/** One cell (see the file comment). */
+struct Cell {
+  int mol_id = 0;
+  int topology = 0;
+  int node_begin = 0; ///< its nodes in Model::node_index, topology.n_nodes of them
+  double kag = 0.0, area0 = 1.0, kv = 0.0, volume0 = 1.0; ///< eqs. 6, 7
+  int local_bond_id = -1, global_bond_id = -1;            ///< for messages
+};
+
+/** Cells evaluated together: one (lanes = 1) or up to four of one topology. */
+struct Group {
+  int lanes = 1;
+  std::array<int, lanes_of<Lanes>> cell{}; ///< unused lanes repeat the first cell
+  int n_cells = 1;                         ///< lanes that are distinct cells
+};
+
+class Model {
+public:
+  /** Builds the tables from the membrane bonds of `bonded` chosen by `select`.
+   *  Throws SimulationInstability for a bond of a missing particle,
+   *  InputError for a cell with two OifGlobalForces interactions. */
+  void compile(const std::vector<BondedEntry>& bonded, const Selection& select,
+               const ParticleStore& p);
+  bool empty() const { return m_cells.empty(); }
+  const std::vector<Cell>& cells() const { return m_cells; }
+  const std::vector<Topology>& topologies() const { return m_topologies; }
+  const std::vector<Group>& groups() const { return m_groups; }
+  /** (particle id, local index) of all cells' nodes, each once, by id. */
+  std::vector<std::pair<int, int>> nodes_by_id(const ParticleStore& p) const;
+
+  /** Forces of all cells added to force[local index] (may be null), node
+   *  normals written to normal[local index] (may be null), and with reports
+   *  (may be null) one CellReport per cell, in cells() order. */
+  void evaluate(const ParticleStore& p, const BoxGeometry& box, double time, Vec3* force,
+                Vec3* normal, std::vector<CellReport>* reports, PassCounts& counts);
+
+private:
+  template <class T, bool with_reports>
+  void evaluate_group(const Group& group, const ParticleStore& p, const BoxGeometry& box,
+                      double time, Vec3* force, Vec3* normal, std::vector<CellReport>* reports);
+  /** Throws the SimulationInstability that names what went wrong in `cell`
+   *  (positions as gathered in lane `lane` of the workspace). */
+  template <class T>
+  [[noreturn]] void report_failure(const Group& group, int lane, const ParticleStore& p,
+                                   double time) const;
+
+  std::vector<Topology> m_topologies;
+  std::vector<Cell> m_cells;
+  std::vector<Group> m_groups;
+  std::vector<int> m_node_index;   ///< cell node -> local particle index
+  bool m_shared_nodes = false;     ///< a particle is a node of two cells (normals summed)
+  std::vector<int> m_normal_nodes; ///< local indices that get a normal, each once
+
+  /** Scratch of the pass for one scalar type. */
+  template <class T> struct Workspace {
+    struct Node {
+      T c[3];
+    };
+    std::vector<Node> x, v, f, nsum, vsum; ///< per node of the largest cell
+    std::vector<T> g, coef;                ///< per triangle of the largest cell
+  };
+  Workspace<double> m_plain;
+  Workspace<Lanes> m_lanes;
+  template <class T> Workspace<T>& workspace();
+};
+
+/** The membranes of a System: the compiled model of all its membrane bonds,
+ *  kept until the particles' layout, their mol_ids or the bonds change. */
+class Membranes {
+public:
+  /** Batches of four cells in vector lanes (true) or every cell alone
+   *  (false; tests compare the two, bit for bit). */
+  bool lanes = true;
+  PassCounts counts;
+
+  /** The time step's membrane phase: forces of all membrane bonds added to
+   *  the particles, node normals written. bonds_version: the System's count
+   *  of bond changes. */
+  void add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t bonds_version,
+                  ParticleStore& p, const BoxGeometry& box, double time);
+  /** Drops the compiled model (the next call compiles again). */
+  void invalidate() { m_key = Key{}; }
+
+private:
+  struct Key {
+    std::uint64_t layout = 0, mol = 0, bonds = 0;
+    bool lanes = true, valid = false;
+    bool operator==(const Key& o) const {
+      return layout == o.layout && mol == o.mol && bonds == o.bonds && lanes == o.lanes &&
+             valid == o.valid;
+    }
+  };
+  Key m_key;
+  Model m_model;
+};
+
+/** Analysis of the membrane bonds chosen by `select` (one interaction, one
+ *  cell, one term), compiled anew and evaluated by the same driver as the
+ *  time step: one report per cell; with force (may be null) the selected
+ *  forces added to force[local index]. */
+std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,
+                                const ParticleStore& p, const BoxGeometry& box, double time,
+                                Vec3* force, PassCounts* counts = nullptr);
+
+} // namespace pyoif::membrane

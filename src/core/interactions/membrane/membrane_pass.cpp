@@ -1,0 +1,414 @@
+// The membrane component's pass (membrane_model.hpp): one driver for every
+// cell, a template over the scalar type. T = double evaluates one cell, T =
+// Lanes four cells of one topology at once, one per vector lane, with the
+// same operations in the same order, so the two agree bit for bit. With four
+// cells in the lanes a node's x of the four cells is one vector: the gathers
+// of the triangle and edge passes are plain vector loads and the force
+// scatters vector adds (doc/performance.md, tenth round).
+#include "interactions/membrane/area.hpp"
+#include "interactions/membrane/bending.hpp"
+#include "interactions/membrane/membrane_model.hpp"
+#include "interactions/membrane/normals.hpp"
+#include "interactions/membrane/stretching.hpp"
+#include "interactions/membrane/viscosity.hpp"
+#include "interactions/membrane/volume.hpp"
+#include "utils/errors.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <sstream>
+#include <type_traits>
+
+namespace pyoif::membrane {
+
+template <> Model::Workspace<double>& Model::workspace<double>() {
+  return m_plain;
+}
+template <> Model::Workspace<Lanes>& Model::workspace<Lanes>() {
+  return m_lanes;
+}
+
+namespace {
+
+/** Edges per block of the edge pass. An edge's chain from the node loads
+ *  through the square roots and the division to its force factors is about
+ *  130 cycles long; as one loop per edge it ran at that latency (the body
+ *  did not fit the core's reorder window twice). Two loops per block (the
+ *  factors, then the forces) let the iterations overlap. */
+constexpr int kEdgeBlock = 16;
+
+/** Stretching (eq. 3), viscosity and bending (eq. 4) of every edge of the
+ *  topology, added to the node forces f; x, v: the nodes' positions and
+ *  velocities. With energies (non-null) the edges' stretching and bending
+ *  energies are summed into them. Returns the lanes with a zero-length edge
+ *  or (bending) a degenerate wing triangle. */
+template <class T, bool neo, bool visc, bool bend, class Node>
+Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
+                  T* stretching_energy_sum, T* bending_energy_sum) {
+  struct Factors {
+    T e[3], n1[3], n2[3], coefficient;
+    BendingFactors<T> bending;
+  };
+  Factors blk[kEdgeBlock];
+  Mask<T> bad = no_lane<T>();
+  const int n_edges = static_cast<int>(t.edge_b.size());
+  const int *const eb = t.edge_b.data(), *const ea = t.edge_a.data(), *const ec = t.edge_c.data(),
+                   *const ed = t.edge_d.data();
+  for (int first = 0; first < n_edges; first += kEdgeBlock) {
+    const int nb = std::min(kEdgeBlock, n_edges - first);
+    for (int i = 0; i < nb; ++i) {
+      const int k = first + i;
+      Factors& out = blk[i];
+      const Node& xb = x[eb[k]];
+      T e[3], u[3] = {}, w[3] = {}, dv[3] = {};
+      for (int d = 0; d < 3; ++d) {
+        e[d] = x[ec[k]].c[d] - xb.c[d];
+        if constexpr (bend) {
+          u[d] = x[ea[k]].c[d] - xb.c[d];
+          w[d] = x[ed[k]].c[d] - xb.c[d];
+        }
+        if constexpr (visc)
+          dv[d] = v[ec[k]].c[d] - v[eb[k]].c[d];
+        out.e[d] = e[d];
+      }
+      const T l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+      bad |= not_positive(l2);
+      const T l = sqrt_of(l2);
+      const T lambda = l * t.inv_r0[k];
+      // the four quotients of the edge: 1 / l^2, 1 / kappa's denominator,
+      // the deviation's tangent, 1 / (|n1|^2 |n2|^2)
+      T den[4] = {l2, splat<T>(1.0), splat<T>(1.0), splat<T>(1.0)};
+      if constexpr (neo)
+        den[1] = neo_hookean_denominator(lambda);
+      if constexpr (bend) {
+        const Wings<T> wings(e, u, w);
+        bad |= not_positive(wings.n1_2) | not_positive(wings.n2_2);
+        const Deviation<T> dev(wings.y(l, w), wings.x(), t.cos_psi0[k], t.sin_psi0[k]);
+        const Mask<T> small = dev.small();
+        den[2] = select<T>(small, dev.cosine, splat<T>(1.0));
+        den[3] = wings.n1_2 * wings.n2_2;
+        const FourReciprocals<T> r(den);
+        const T dphi = bending_deviation(dev, small, dev.sine * r.inv[2]);
+        out.bending = BendingFactors<T>(t.kb[k], dphi, l, r.inv[3], wings, r.inv[0], e, u, w);
+        for (int d = 0; d < 3; ++d) {
+          out.n1[d] = wings.n1[d];
+          out.n2[d] = wings.n2[d];
+        }
+        out.coefficient = stretching_coefficient<neo>(l, lambda, r.inv[0], r.inv[1], t.r0[k],
+                                                      t.ks[k], t.kslin[k]);
+        if constexpr (visc)
+          out.coefficient += viscosity_coefficient(e, dv, r.inv[0], t.kvisc[k]);
+        if (bending_energy_sum)
+          *bending_energy_sum += bending_energy(t.kb[k], dphi);
+      } else {
+        const FourReciprocals<T> r(den);
+        out.coefficient = stretching_coefficient<neo>(l, lambda, r.inv[0], r.inv[1], t.r0[k],
+                                                      t.ks[k], t.kslin[k]);
+        if constexpr (visc)
+          out.coefficient += viscosity_coefficient(e, dv, r.inv[0], t.kvisc[k]);
+      }
+      if (stretching_energy_sum)
+        for (int j = 0; j < lanes_of<T>; ++j)
+          set_lane(*stretching_energy_sum, j,
+                   lane(*stretching_energy_sum, j) +
+                       stretching_energy(lane(l, j), t.r0[k], t.ks[k], t.kslin[k]));
+    }
+    for (int i = 0; i < nb; ++i) {
+      const int k = first + i;
+      const Factors& in = blk[i];
+      Node &fb = f[eb[k]], &fc = f[ec[k]];
+      for (int d = 0; d < 3; ++d) {
+        const T fe = in.coefficient * in.e[d]; // stretching and viscosity: fe on B, -fe on C
+        if constexpr (bend) {
+          T fa_, fb_, fc_, fd_;
+          in.bending.forces(fe, in.n1[d], in.n2[d], fa_, fb_, fc_, fd_);
+          fb.c[d] += fb_;
+          fc.c[d] += fc_;
+          f[ea[k]].c[d] += fa_;
+          f[ed[k]].c[d] += fd_;
+        } else {
+          fb.c[d] += fe;
+          fc.c[d] += -fe;
+        }
+      }
+    }
+  }
+  return bad;
+}
+
+/** edge_pass for the terms the topology has (one instantiation each). */
+template <class T, class Node>
+Mask<T> edge_pass_for(const Topology& t, const Node* x, const Node* v, Node* f, T* stretching_sum,
+                      T* bending_sum) {
+  auto with = [&](auto neo, auto visc, auto bend) {
+    return edge_pass<T, decltype(neo)::value, decltype(visc)::value, decltype(bend)::value>(
+        t, x, v, f, stretching_sum, bending_sum);
+  };
+  using yes = std::true_type;
+  using no = std::false_type;
+  auto by_bend = [&](auto neo, auto visc) {
+    return t.bend ? with(neo, visc, yes{}) : with(neo, visc, no{});
+  };
+  if (t.neo)
+    return t.visc ? by_bend(yes{}, yes{}) : by_bend(yes{}, no{});
+  return t.visc ? by_bend(no{}, yes{}) : by_bend(no{}, no{});
+}
+
+} // namespace
+
+template <class T, bool with_reports>
+void Model::evaluate_group(const Group& group, const ParticleStore& p, const BoxGeometry& box,
+                           double time, Vec3* force, Vec3* normal,
+                           std::vector<CellReport>* reports) {
+  using Node = typename Workspace<T>::Node;
+  constexpr int kLanes = lanes_of<T>;
+  const Topology& t = m_topologies[m_cells[group.cell[0]].topology];
+  Workspace<T>& ws = workspace<T>();
+  const int n = t.n_nodes, n_tri = static_cast<int>(t.tri_v0.size());
+  if (static_cast<int>(ws.x.size()) < n)
+    for (auto* a : {&ws.x, &ws.v, &ws.f, &ws.nsum, &ws.vsum})
+      a->resize(n);
+  if (static_cast<int>(ws.g.size()) < n_tri) {
+    ws.g.resize(n_tri);
+    ws.coef.resize(n_tri);
+  }
+  Node *const x = ws.x.data(), *const v = ws.v.data(), *const f = ws.f.data();
+  Node *const nsum = ws.nsum.data(), *const vsum = t.separate_sums ? ws.vsum.data() : nsum;
+
+  // gather: each node unfolded relative to its cell's first node, the image
+  // difference first (integers, exact: no rounding that grows with the
+  // number of boxes a cell has travelled)
+  T kag{}, area0{}, kv{}, volume0{};
+  const Vec3& box_l = box.length();
+  for (int j = 0; j < kLanes; ++j) {
+    const Cell& cell = m_cells[group.cell[j]];
+    set_lane(kag, j, cell.kag);
+    set_lane(area0, j, cell.area0);
+    set_lane(kv, j, cell.kv);
+    set_lane(volume0, j, cell.volume0);
+    const int* const index = m_node_index.data() + cell.node_begin;
+    const Vec3 pos_r = p.pos[index[0]];
+    const Vec3i image_r = p.image[index[0]];
+    for (int k = 0; k < n; ++k) {
+      const int i = index[k];
+      const Vec3 xk =
+          (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(box_l);
+      for (int d = 0; d < 3; ++d)
+        set_lane(x[k].c[d], j, xk[d]);
+    }
+    if (t.visc)
+      for (int k = 0; k < n; ++k)
+        for (int d = 0; d < 3; ++d)
+          set_lane(v[k].c[d], j, p.vel[index[k]][d]);
+  }
+  const bool volume_forces = t.closed && any_lane<T>(kv != T{});
+  const bool node_sums = t.normals || volume_forces;
+  for (int k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d) {
+      f[k].c[d] = T{};
+      nsum[k].c[d] = T{};
+      vsum[k].c[d] = T{};
+    }
+
+  // triangle pass: per triangle N, its area and volume term and the
+  // centroid allocation's scale (area.hpp), the local area coefficient
+  // (eq. 5), the global area's direction factor (eq. 6; the cell's factor
+  // applies once the cell's area is known), the cell's area and volume, and
+  // per node the sums of N of its closed and its normals' triangles
+  T area_sum{}, volume_sum{}, local_area_energy_sum{};
+  Mask<T> bad = no_lane<T>();
+  if (n_tri > 0) {
+    const Node origin = x[t.origin];
+    for (int q = 0; q < n_tri; ++q) {
+      const Node &a = x[t.tri_v0[q]], &b = x[t.tri_v1[q]], &c = x[t.tri_v2[q]];
+      T e1[3], e2[3], ra[3];
+      for (int d = 0; d < 3; ++d) {
+        e1[d] = b.c[d] - a.c[d];
+        e2[d] = c.c[d] - a.c[d];
+        ra[d] = a.c[d] - origin.c[d];
+      }
+      const TriangleGeometry<T> tri(e1, e2, ra);
+      const double kal_weight = t.kal_weight[q], closed = t.closed_weight[q];
+      if (kal_weight != 0.0)
+        bad |= not_positive(tri.area);
+      area_sum += closed * tri.area;
+      volume_sum += closed * tri.volume_term;
+      ws.g[q] = closed * tri.area * tri.inv_moment;
+      ws.coef[q] = local_area_coefficient(tri.area, tri.inv_moment, kal_weight, t.kal_area0[q]);
+      if (node_sums) {
+        const double w = t.separate_sums ? t.normal_weight[q] : closed;
+        for (int d = 0; d < 3; ++d) {
+          const T nd = w * tri.n[d];
+          nsum[t.tri_v0[q]].c[d] += nd;
+          nsum[t.tri_v1[q]].c[d] += nd;
+          nsum[t.tri_v2[q]].c[d] += nd;
+          if (t.separate_sums) {
+            const T vd = closed * tri.n[d];
+            vsum[t.tri_v0[q]].c[d] += vd;
+            vsum[t.tri_v1[q]].c[d] += vd;
+            vsum[t.tri_v2[q]].c[d] += vd;
+          }
+        }
+      }
+      if constexpr (with_reports)
+        if (kal_weight != 0.0)
+          for (int j = 0; j < kLanes; ++j)
+            set_lane(local_area_energy_sum, j,
+                     lane(local_area_energy_sum, j) +
+                         local_area_energy(lane(tri.area, j), kal_weight, t.kal_area0[q]));
+    }
+  }
+  // the cell's factors of eqs. 6 and 7
+  const T cell_volume = volume_sum / 6.0;
+  const T sign = orientation_sign(cell_volume);
+  const T area_factor = global_area_factor(area_sum, kag, area0);
+  const T vol_factor = volume_factor(cell_volume, sign, kv, volume0);
+  // area forces (eqs. 5, 6) along the centroid offsets
+  if (t.local_area || any_lane<T>(area_factor != T{}))
+    for (int q = 0; q < n_tri; ++q) {
+      const T cq = ws.coef[q] + area_factor * ws.g[q];
+      const Node &a = x[t.tri_v0[q]], &b = x[t.tri_v1[q]], &c = x[t.tri_v2[q]];
+      for (int d = 0; d < 3; ++d) {
+        const CentroidOffsets<T> m(b.c[d] - a.c[d], c.c[d] - a.c[d]);
+        f[t.tri_v0[q]].c[d] += cq * m.a;
+        f[t.tri_v1[q]].c[d] += cq * m.b;
+        f[t.tri_v2[q]].c[d] += cq * m.c;
+      }
+    }
+  // edge pass: stretching, viscosity, bending
+  T stretching_energy_sum{}, bending_energy_sum{};
+  if (t.edges)
+    bad |= edge_pass_for<T>(t, x, v, f, with_reports ? &stretching_energy_sum : nullptr,
+                            with_reports ? &bending_energy_sum : nullptr);
+  // per node: the volume force along its sum of N (eq. 7), all finite
+  for (int k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d) {
+      if (volume_forces)
+        f[k].c[d] += vol_factor * vsum[k].c[d];
+      bad |= not_finite(f[k].c[d]);
+    }
+  for (int j = 0; j < group.n_cells; ++j)
+    if (lane_set<T>(bad, j))
+      report_failure<T>(group, j, p, time);
+
+  // forces and normals to the particles
+  for (int j = 0; j < group.n_cells; ++j) {
+    const Cell& cell = m_cells[group.cell[j]];
+    const int* const index = m_node_index.data() + cell.node_begin;
+    if (force)
+      for (int k = 0; k < n; ++k)
+        force[index[k]] += Vec3(lane(f[k].c[0], j), lane(f[k].c[1], j), lane(f[k].c[2], j));
+    if constexpr (with_reports) {
+      CellReport& r = (*reports)[group.cell[j]];
+      r.area = lane(area_sum, j);
+      r.volume = lane(cell_volume, j);
+      r.energy[stretching] = lane(stretching_energy_sum, j);
+      r.energy[bending] = lane(bending_energy_sum, j);
+      r.energy[local_area] = lane(local_area_energy_sum, j);
+      r.energy[global_area] = global_area_energy(r.area, cell.kag, cell.area0);
+      r.energy[volume] = volume_energy(r.volume, cell.kv, cell.volume0);
+    }
+  }
+  if (normal && t.normals)
+    for (int k = 0; k < n; ++k) {
+      if (!t.has_normal[k])
+        continue;
+      const Node& s = nsum[k];
+      if (m_shared_nodes) { // summed over the cells of the node, normalised at the end
+        for (int j = 0; j < group.n_cells; ++j)
+          normal[m_node_index[m_cells[group.cell[j]].node_begin + k]] +=
+              lane(sign, j) * Vec3(lane(s.c[0], j), lane(s.c[1], j), lane(s.c[2], j));
+      } else {
+        const OutwardNormal<T> nk(s.c[0], s.c[1], s.c[2], sign);
+        for (int j = 0; j < group.n_cells; ++j)
+          normal[m_node_index[m_cells[group.cell[j]].node_begin + k]] =
+              Vec3(lane(nk.x, j), lane(nk.y, j), lane(nk.z, j));
+      }
+    }
+}
+
+template <class T>
+void Model::report_failure(const Group& group, int j, const ParticleStore& p, double time) const {
+  using Node = typename Workspace<T>::Node;
+  const Cell& cell = m_cells[group.cell[j]];
+  const Topology& t = m_topologies[cell.topology];
+  const Workspace<T>& ws = const_cast<Model*>(this)->workspace<T>();
+  const int* const index = m_node_index.data() + cell.node_begin;
+  auto pid = [&](int k) { return p.id[index[k]]; };
+  auto at = [&](const Node& node) {
+    return Vec3(lane(node.c[0], j), lane(node.c[1], j), lane(node.c[2], j));
+  };
+  std::ostringstream msg;
+  const std::string where = " (bonded interaction " + std::to_string(cell.local_bond_id) +
+                            ", the cell with mol_id " + std::to_string(cell.mol_id) + ")";
+  for (std::size_t k = 0; k < t.edge_b.size(); ++k) {
+    const Vec3 b = at(ws.x[t.edge_b[k]]), a = at(ws.x[t.edge_a[k]]), c = at(ws.x[t.edge_c[k]]),
+               d = at(ws.x[t.edge_d[k]]);
+    const bool zero_edge = !((c - b).squaredNorm() > 0.0);
+    const bool flat_wing = t.bend && (!((a - b).cross(c - b).squaredNorm() > 0.0) ||
+                                      !((c - b).cross(d - b).squaredNorm() > 0.0));
+    if (zero_edge || flat_wing) {
+      msg << "OifLocalForces bond between particles " << pid(t.edge_b[k]) << ' ' << pid(t.edge_a[k])
+          << ' ' << pid(t.edge_c[k]) << ' ' << pid(t.edge_d[k]) << where << " broke at time "
+          << time << ": "
+          << (zero_edge ? "its edge has zero length" : "one of its triangles has zero area");
+      throw SimulationInstability(msg.str());
+    }
+  }
+  for (std::size_t q = 0; q < t.tri_v0.size(); ++q) {
+    const Vec3 a = at(ws.x[t.tri_v0[q]]), b = at(ws.x[t.tri_v1[q]]), c = at(ws.x[t.tri_v2[q]]);
+    if (t.kal_weight[q] != 0.0 && !((b - a).cross(c - a).squaredNorm() > 0.0)) {
+      msg << "OifLocalForces" << where << ": the triangle of particles " << pid(t.tri_v0[q]) << ' '
+          << pid(t.tri_v1[q]) << ' ' << pid(t.tri_v2[q]) << " has zero area at time " << time
+          << " (local area, eq. 5)";
+      throw SimulationInstability(msg.str());
+    }
+  }
+  int worst = 0;
+  for (int k = 0; k < t.n_nodes; ++k)
+    if (!at(ws.f[k]).allFinite()) {
+      worst = k;
+      break;
+    }
+  msg << "the membrane forces of the cell with mol_id " << cell.mol_id
+      << " (bonded interactions: local " << cell.local_bond_id << ", global " << cell.global_bond_id
+      << ") are not finite at particle " << pid(worst) << " at time " << time
+      << ": the cell has blown up (or its triangles collapsed); reduce the time step or the moduli";
+  throw SimulationInstability(msg.str());
+}
+
+void Model::evaluate(const ParticleStore& p, const BoxGeometry& box, double time, Vec3* force,
+                     Vec3* normal, std::vector<CellReport>* reports, PassCounts& counts) {
+  if (reports) {
+    reports->assign(m_cells.size(), CellReport{});
+    for (std::size_t c = 0; c < m_cells.size(); ++c)
+      (*reports)[c].mol_id = m_cells[c].mol_id;
+  }
+  if (normal && m_shared_nodes)
+    for (const int i : m_normal_nodes)
+      normal[i].setZero();
+  for (const Group& g : m_groups) {
+    if (g.lanes > 1) {
+      ++counts.lane_batches;
+      counts.padded_lanes += g.lanes - g.n_cells;
+      if (reports)
+        evaluate_group<Lanes, true>(g, p, box, time, force, normal, reports);
+      else
+        evaluate_group<Lanes, false>(g, p, box, time, force, normal, reports);
+    } else {
+      ++counts.plain_cells;
+      if (reports)
+        evaluate_group<double, true>(g, p, box, time, force, normal, reports);
+      else
+        evaluate_group<double, false>(g, p, box, time, force, normal, reports);
+    }
+  }
+  if (normal && m_shared_nodes)
+    for (const int i : m_normal_nodes) {
+      const OutwardNormal<double> n(normal[i][0], normal[i][1], normal[i][2], 1.0);
+      normal[i] = Vec3(n.x, n.y, n.z);
+    }
+}
+
+} // namespace pyoif::membrane
