@@ -286,51 +286,35 @@ std::vector<Case> cases() {
                                dilations(4)));
   // ---- whole cells: one (the one-cell path) and four (one batch in vector lanes)
   const std::size_t per_cell = cell_mesh()->nodes.size();
+  const auto local = [](OifLocalForces ia) {
+    return [ia](pyoif::System& s, const oif_test::Mesh& m, int first) {
+      const int id = s.add_bonded_interaction(ia);
+      s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
+    };
+  };
+  const auto global = [](double area0, double kag, double volume0, double kv) {
+    return [=](pyoif::System& s, const oif_test::Mesh& m, int first) {
+      OifGlobalForces g;
+      g.A0_g = area0;
+      g.ka_g = kag;
+      g.V0 = volume0;
+      g.kv = kv;
+      const int id = s.add_bonded_interaction(g);
+      s.add_bonds(id, oif_test::triangle_bond_ids(m, first), {});
+    };
+  };
   for (const int cells : {1, kCells}) {
+    out.push_back(cell_case("oif_volume", cells, global(1.0, 0.0, 30.0, 0.8)));
+    out.push_back(cell_case("oif_bending_cell", cells, local(OifLocalForces{0, 0, 0.6, 0, 0})));
     out.push_back(
-        cell_case("oif_volume", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-          OifGlobalForces g;
-          g.kv = 0.8;
-          g.V0 = 30.0;
-          g.A0_g = 1.0;
-          const int id = s.add_bonded_interaction(g);
-          s.add_bonds(id, oif_test::triangle_bond_ids(m, first), {});
-        }));
-    out.push_back(cell_case(
-        "oif_bending_cell", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-          const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0.6, 0, 0});
-          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
-        }));
-    out.push_back(cell_case(
-        "oif_stretching_cell", cells, [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-          const int id = s.add_bonded_interaction(OifLocalForces{0.5, 0.2, 0, 0, 0});
-          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
-        }));
+        cell_case("oif_stretching_cell", cells, local(OifLocalForces{0.5, 0.2, 0, 0, 0})));
     out.push_back(
-        cell_case("oif_stretching_linear_cell", cells,
-                  [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-                    const int id = s.add_bonded_interaction(OifLocalForces{0, 0.4, 0, 0, 0});
-                    s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
-                  }));
+        cell_case("oif_stretching_linear_cell", cells, local(OifLocalForces{0, 0.4, 0, 0, 0})));
     // the area terms along each cell's dilation (see above)
-    out.push_back(cell_case(
-        "oif_local_area_cell", cells,
-        [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-          const int id = s.add_bonded_interaction(OifLocalForces{0, 0, 0, 0.6, 0});
-          s.add_bonds(id, oif_test::local_bond_ids(m, first), cell_references(m));
-        },
-        dilations(per_cell)));
-    out.push_back(cell_case(
-        "oif_global_area", cells,
-        [](pyoif::System& s, const oif_test::Mesh& m, int first) {
-          OifGlobalForces g;
-          g.ka_g = 0.9;
-          g.A0_g = 40.0;
-          g.V0 = 1.0;
-          const int id = s.add_bonded_interaction(g);
-          s.add_bonds(id, oif_test::triangle_bond_ids(m, first), {});
-        },
-        dilations(per_cell)));
+    out.push_back(cell_case("oif_local_area_cell", cells, local(OifLocalForces{0, 0, 0, 0.6, 0}),
+                            dilations(per_cell)));
+    out.push_back(
+        cell_case("oif_global_area", cells, global(40.0, 0.9, 1.0, 0.0), dilations(per_cell)));
   }
   return out;
 }
