@@ -5,7 +5,7 @@ scene (box 160 x 40 x 22 um, 60 RBCs of radius 3.91 um with 374 nodes, the
 rare cell of radius 7.5 um with 642 nodes), at 2, 8 and 64 ranks. The
 numbers behind the decision in doc/architecture.md ("Parallel model").
 
-    pyoif maintainer/benchmarks/ownership_model.py [--seeds 20] [--csv ownership_model.csv]
+    pyoif maintainer/benchmarks/ownership_model.py [--seeds 10] [--csv ownership_model.csv]
 
 (a) node ownership (ESPResSo): every node belongs to the rank whose
     subdomain holds it; a bond is evaluated by the rank of its first node,
@@ -144,7 +144,7 @@ def measure(ranks, rng):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--csv", default=None)
     args = ap.parse_args()
     rows = []

@@ -486,6 +486,104 @@ TEST(OifMembrane, OutwardNormals) {
   }
 }
 
+// Normals from other triangles than the closed surface (an OifOutDirection
+// group over half of the triangles, OifGlobalForces over all): the volume
+// force is that of the whole surface, bit for bit the force without the
+// normals, and each node's normal is the outward unit sum of N over its
+// normals' triangles only (computed here directly).
+TEST(OifMembrane, NormalsOfOtherTrianglesThanTheSurface) {
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i)
+    x[i] = Vec3(1.1, 0.95, 1.0).cwiseProduct(m.nodes[i]) + 0.05 * Vec3(u(rng), u(rng), u(rng)) +
+           Vec3(25, 25, 25);
+  std::vector<std::array<int, 3>> half; // the upper half
+  for (const auto& tr : m.triangles)
+    if (m.nodes[tr[0]][2] + m.nodes[tr[1]][2] + m.nodes[tr[2]][2] > 0.0)
+      half.push_back(tr);
+  std::vector<int> half_ids;
+  for (const auto& tr : half)
+    half_ids.insert(half_ids.end(), tr.begin(), tr.end());
+  auto with = [&](bool normals) {
+    auto s = oif_test::make_system();
+    oif_test::add_cell_particles(*s, x, 0);
+    add_global(*s, m, m.nodes, 0.7, 0.9);
+    if (normals) {
+      const int id = s->add_bonded_interaction(OifOutDirection{});
+      s->add_bonds(id, half_ids, {});
+    }
+    return s;
+  };
+  auto plain = with(false), both = with(true);
+  const auto f_plain = oif_test::forces_of(*plain, n), f_both = oif_test::forces_of(*both, n);
+  std::vector<Vec3> sum(n, Vec3::Zero());
+  std::vector<char> has(n, 0);
+  for (const auto& tr : half) {
+    const Vec3 nq = (x[tr[1]] - x[tr[0]]).cross(x[tr[2]] - x[tr[0]]); // outward order
+    for (const int i : tr) {
+      sum[i] += nq;
+      has[i] = 1;
+    }
+  }
+  std::size_t with_normal = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(f_both[i], f_plain[i]) << "node " << i;
+    const Vec3 normal = both->particles.normal[both->particles.index(static_cast<int>(i))];
+    if (has[i]) {
+      ++with_normal;
+      EXPECT_LT((normal - sum[i].normalized()).norm(), 1e-14) << "node " << i;
+    } else {
+      EXPECT_EQ(normal, Vec3::Zero()) << "node " << i << " is in no normals triangle";
+    }
+  }
+  EXPECT_GT(with_normal, n / 2);
+  EXPECT_LT(with_normal, n);
+}
+
+// A particle that is a node of two cells (two tetrahedra, mol_ids 0 and 1,
+// sharing one vertex): its normal is
+// the outward unit sum over both cells, each cell's triangles oriented by
+// that cell's volume (computed here directly); every normal has length 1.
+TEST(OifMembrane, NormalOfANodeOfTwoCells) {
+  auto s = oif_test::make_system(20.0);
+  const std::vector<Vec3> x = {{5, 5, 5},     {6.2, 5, 5.1}, {5.1, 6.1, 5},  {5.2, 5.1, 6.3},
+                               {6.1, 6.3, 7}, {7.4, 6.1, 7}, {6.6, 7.5, 7.2}};
+  for (std::size_t i = 0; i < x.size(); ++i)
+    s->add_particle(static_cast<int>(i), x[i], Vec3::Zero(), 1.0, 0, i < 3 ? 0 : (i == 3 ? 0 : 1),
+                    Vec3::Zero(), 0);
+  // cell 0: nodes 0 1 2 3; cell 1: nodes 3 4 5 6 (the first particle of each
+  // of its triangles in cell 1)
+  const std::vector<std::array<int, 3>> t0 = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  const std::vector<std::array<int, 3>> t1 = {{4, 5, 6}, {4, 3, 5}, {5, 3, 6}, {6, 3, 4}};
+  const int id = s->add_bonded_interaction(OifOutDirection{});
+  std::vector<int> ids;
+  for (const auto* cell : {&t0, &t1})
+    for (const auto& tr : *cell)
+      ids.insert(ids.end(), tr.begin(), tr.end());
+  s->add_bonds(id, ids, {});
+  s->compute_forces();
+  auto oriented_sum = [&](const std::vector<std::array<int, 3>>& tris, int node) -> Vec3 {
+    double volume = 0.0;
+    Vec3 sum = Vec3::Zero();
+    for (const auto& tr : tris) {
+      const Vec3 nq = (x[tr[1]] - x[tr[0]]).cross(x[tr[2]] - x[tr[0]]);
+      volume += (x[tr[0]] - x[3]).dot(nq);
+      if (tr[0] == node || tr[1] == node || tr[2] == node)
+        sum += nq;
+    }
+    return (volume < 0.0 ? -1.0 : 1.0) * sum;
+  };
+  for (int i = 0; i < 7; ++i) {
+    const Vec3 normal = s->particles.normal[s->particles.index(i)];
+    EXPECT_NEAR(normal.norm(), 1.0, 1e-14) << "node " << i;
+    const Vec3 expected = (oriented_sum(t0, i) + oriented_sum(t1, i)).normalized();
+    EXPECT_LT((normal - expected).norm(), 1e-14) << "node " << i;
+  }
+}
+
 // Membrane collision, pure evaluator: facing membranes repel along the
 // separation; once node i has passed through j's membrane the force reverses
 // and pulls it back. In both cases the force on i points into i's own cell

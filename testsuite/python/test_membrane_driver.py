@@ -228,6 +228,55 @@ class TimeStepAndAnalysis(unittest.TestCase):
         err = np.abs(total - f_step).max() / np.abs(f_step).max()
         self.assertLess(err, 1e-12)
 
+    def test_positions_set_folded(self):
+        """A script that sets a cell's positions to their folded values (the
+        cell across the box corner, so its unfolded positions jump by a box
+        length) gets the same forces: the gather falls back to the minimum
+        image relative to the cell's first node (1e-12 relative)."""
+        system, cells = make(ALL)
+        f_before, _ = forces_and_normals(system)
+        folded = cells[0].particles.pos_folded
+        self.assertGreater(np.ptp(folded, axis=0).max(), BOX / 2)  # really split by the faces
+        cells[0].particles.pos = folded
+        f_after, _ = forces_and_normals(system)
+        err = np.abs(f_after - f_before).max() / np.abs(f_before).max()
+        self.assertLess(err, 1e-12)
+        system.integrator.run(5)  # and runs on
+
+    def test_collapsed_surface_triangle_names_it(self):
+        """A triangle of a cell's closed surface collapsed to a line: with
+        global terms on it is named, as the local bonds' are; a cell with
+        normals only goes on."""
+        from lbmd.interactions import OifGlobalForces, OifOutDirection
+        for interaction in (OifGlobalForces(A0_g=3.0, ka_g=0.0, V0=0.6, kv=0.8), OifOutDirection()):
+            for lanes in (True, False):
+                system = lbmd.System(box_l=[10.0, 10.0, 10.0])
+                system.time_step = 0.01
+                # vertex 3 on the line through 0 and 1: triangle (0, 1, 3) has no area
+                x = np.array([[1.0, 1.0, 1.0], [2.0, 1.0, 1.0], [1.2, 2.0, 1.1], [1.5, 1.0, 1.0]])
+                ids = system.part.add(pos=x).id
+                system.bonded_inter.add(interaction)
+                system.part.add_bonds(interaction, np.array(
+                    [[ids[0], ids[2], ids[1]], [ids[0], ids[1], ids[3]], [ids[1], ids[2], ids[3]],
+                     [ids[0], ids[3], ids[2]]]))
+                system._core.membrane_lanes = lanes
+                if isinstance(interaction, OifOutDirection):
+                    system._core.compute_forces()
+                    continue
+                with self.assertRaises(lbmd.SimulationInstability) as ctx:
+                    system._core.compute_forces()
+                self.assertIn("OifGlobalForces triangle of particles", str(ctx.exception))
+                self.assertIn("zero area", str(ctx.exception))
+
+    def test_bad_analysis_inputs(self):
+        system, cells = make(ALL)
+        bond = system.bonded_inter._id_of(cells[0].cell_type.local_force_interaction)
+        with self.assertRaisesRegex(ValueError, "mol_id"):
+            system._core.oif_energies(bond, -3)
+        with self.assertRaisesRegex(ValueError, "angle 1 .* is degenerate"):
+            lbmd._lbmd.membrane_angles(np.array([[0.0, 1, 0], [0, 0, 0], [1, 0, 0], [0, -1, 0]]),
+                                       np.array([[0, 1, 2, 3], [0, 1, 1, 3]]))
+
     def test_broken_bond_names_it(self):
         for moduli in (dict(ks=0.05, kb=0.08), ALL):
             system, cells = make(moduli)

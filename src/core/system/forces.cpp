@@ -52,14 +52,12 @@ void System::add_bonded_forces(Energies* e) {
           using IA = std::decay_t<decltype(ia)>;
           if constexpr (!is_membrane_bond<IA>) {
             double energy_sum = 0.0;
-            for_each_bond(
-                ia, entry.bonds, p, box, time,
-                [&](const auto& idx, const auto& f, double energy, const auto&) {
-                  for (std::size_t k = 0; k < idx.size(); ++k)
-                    p.force[idx[k]] += f[k];
-                  energy_sum += energy;
-                },
-                e != nullptr);
+            for_each_bond(ia, entry.bonds, p, box, time,
+                          [&](const auto& idx, const auto& f, double energy, const auto&) {
+                            for (std::size_t k = 0; k < idx.size(); ++k)
+                              p.force[idx[k]] += f[k];
+                            energy_sum += energy;
+                          });
             if (e) {
               e->bonded += energy_sum;
               e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;

@@ -90,9 +90,10 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell"):
     overlaps its own periodic image, and a mesh whose edges reach a quarter
     of the box length has bonds (an edge and its two wing nodes, up to two
     edge lengths from the bond's owner) that the nearest-image convention
-    would cut. Cells between half and a whole box length are fine: bonds
-    use the nearest image of each partner, the cell sums unfolded positions
-    (oif_cell_sums.hpp)."""
+    would cut (the membrane pass falls back to it for a cell whose unfolded
+    positions jumped). Cells between half and a whole box length are fine:
+    the membrane pass takes a cell's nodes unfolded, relative to its first
+    node (src/core/interactions/membrane/membrane_model.hpp)."""
     box = np.asarray(system.box_l, dtype=float)
     periodic = np.asarray(system.periodicity, dtype=bool)
     extent = pos.max(axis=0) - pos.min(axis=0)

@@ -49,6 +49,9 @@ void check_kind(const System& s, const char* caller, int bond_id, std::string wh
 /** One interaction's bonds (with mol_id >= 0 that cell's only, at the cost
  *  of that cell), one term's moduli (term >= 0). */
 membrane::Selection selection(int bond_id, int mol_id, int term) {
+  if (mol_id < -1)
+    throw InputError("mol_id: a cell's mol_id (>= 0), or -1 for all cells, got " +
+                     std::to_string(mol_id));
   membrane::Selection select;
   select.bond_id = bond_id;
   select.mol_id = mol_id;
@@ -108,14 +111,10 @@ py::tuple forces(System& s, int bond_id, const std::string& term, int mol_id) {
     throw InputError("term: OifLocalForces has the terms 'stretching', 'bending', 'local_area' "
                      "and 'visc', got '" +
                      term + "'");
-  const ParticleStore& p = s.particles;
-  membrane::Model model;
-  model.compile(s.bonded, selection(bond_id, mol_id, which), p);
-  std::vector<Vec3> f(p.n_local(), Vec3::Zero());
-  membrane::PassCounts counts;
-  model.evaluate(p, s.box, s.time, f.data(), nullptr, nullptr, counts);
-  // the nodes of the selected cells, in id order
-  const auto nodes = model.nodes_by_id(p);
+  std::vector<Vec3> f(s.particles.n_local(), Vec3::Zero());
+  std::vector<std::pair<int, int>> nodes; // of the selected cells, in id order
+  membrane::analyse(s.bonded, selection(bond_id, mol_id, which), s.particles, s.box, s.time,
+                    f.data(), &nodes);
   IdArray out_ids(static_cast<py::ssize_t>(nodes.size()));
   RealArray out({static_cast<py::ssize_t>(nodes.size()), py::ssize_t{3}});
   auto w = out.mutable_unchecked<2>();
@@ -141,9 +140,20 @@ py::array_t<double> angles(const RealArray& nodes, const IdArray& rows) {
       throw InputError("membrane_angles: node index " + std::to_string(i) + " out of range");
     return Vec3(x(i, 0), x(i, 1), x(i, 2));
   };
-  for (py::ssize_t k = 0; k < r.shape(0); ++k)
-    out.mutable_data()[k] =
-        membrane::dihedral_angle(node(k, 0), node(k, 1), node(k, 2), node(k, 3));
+  for (py::ssize_t k = 0; k < r.shape(0); ++k) {
+    const Vec3 a = node(k, 0), b = node(k, 1), c = node(k, 2), d = node(k, 3);
+    const double e[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+    const double u[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    const double w[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
+    const membrane::Wings<double> wings(e, u, w);
+    if (!(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] > 0.0) || !(wings.n1_2 > 0.0) ||
+        !(wings.n2_2 > 0.0))
+      throw InputError("membrane_angles: angle " + std::to_string(k) + " (nodes " +
+                       std::to_string(r(k, 0)) + ", " + std::to_string(r(k, 1)) + ", " +
+                       std::to_string(r(k, 2)) + ", " + std::to_string(r(k, 3)) +
+                       ") is degenerate: its edge or one of its triangles has no extent");
+    out.mutable_data()[k] = membrane::dihedral_angle(a, b, c, d);
+  }
   return out;
 }
 

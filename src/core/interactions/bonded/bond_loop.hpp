@@ -20,19 +20,14 @@ template <int K> struct BondInput {
   std::array<Vec3, K> x;             ///< positions, x[k>0] as minimum image relative to x[0]
   std::array<Vec3, K> v;             ///< velocities
   const double* reference = nullptr; ///< per-bond reference values (or nullptr)
-  int mol_id = 0;                    ///< cell (molecule) of the first particle
-  std::size_t bond_index = 0;
-  bool want_energy = true; ///< false in the time-step loop: energies may be skipped
 };
 
-/** Visit every bond: sink(local_indices, forces, energy, input). With
- *  want_energy false (the time-step loop) interactions may skip their energy. */
+/** Visit every bond: sink(local_indices, forces, energy, input). */
 template <class IA, class Sink>
 void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
-                   const BoxGeometry& box, double time, Sink&& sink, bool want_energy = true) {
+                   const BoxGeometry& box, double time, Sink&& sink) {
   constexpr int K = IA::n_particles;
   BondInput<K> in;
-  in.want_energy = want_energy;
   std::array<int, K> idx;
   std::array<Vec3, K> f;
   const std::size_t n = group.size();
@@ -51,8 +46,6 @@ void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
       in.v[k] = p.vel[idx[k]];
     }
     in.reference = group.reference(b);
-    in.mol_id = p.mol_id[idx[0]];
-    in.bond_index = b;
     double energy = 0.0;
     if (!ia.forces(in, f, energy)) {
       std::ostringstream msg;

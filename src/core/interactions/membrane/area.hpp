@@ -19,12 +19,19 @@
 
 namespace pyoif::membrane {
 
+/** One triangle's local area (eq. 5), summed over the bonds that have it:
+ *  each triangle is in three pairs of triangles, each applying a third of
+ *  kal (S - S0) (ESPResSo's convention: on a closed mesh eq. 5 once per
+ *  triangle), so kal_weight = sum of kal / 3 and kal_area0 = sum of kal S0 /
+ *  3 over them, and the coefficient is kal_weight S - kal_area0. */
 struct LocalAreaParams {
-  double kal = 0.0;
+  double kal_weight = 0.0;
+  double kal_area0 = 0.0;
 };
-struct GlobalAreaParams {
-  double kag = 0.0;
-  double area0 = 0.0; ///< the cell's relaxed surface S_cell0
+/** A cell's global area (eq. 6); T: double, or Lanes for four cells. */
+template <class T = double> struct GlobalAreaParams {
+  T kag{};
+  T area0{}; ///< the cell's relaxed surface S_cell0 (> 0 where kag is not 0)
 };
 
 /** Component d of the centroid's offsets from the vertices: T - A = (e1 +
@@ -52,45 +59,43 @@ template <class T> struct TriangleGeometry {
       const CentroidOffsets<T> m(e1[d], e2[d]);
       moment += m.a * m.a + m.b * m.b + m.c * m.c;
     }
-    inv_moment = 1.0 / moment;
+    // a triangle collapsed to a point has no direction to allocate along:
+    // no area force (not NaN; where its terms are on, the pass names it)
+    inv_moment = select<T>(moment > T{}, 1.0 / moment, T{});
   }
 };
 
-/** eq. 5's coefficient over the centroid moment: kal (S - S0) / moment, with
- *  the moduli and relaxed areas of the bonds that have the triangle summed:
- *  kal_weight = sum of kal / 3 over them, kal_area0 = sum of kal S0 / 3
- *  (each triangle is in three pairs of triangles, each applying a third,
- *  ESPResSo's convention: on a closed mesh eq. 5 once per triangle). */
+/** eq. 5's coefficient over the centroid moment: (kal_weight S - kal_area0)
+ *  inv_moment. With energy (not null), the triangle's local area energy
+ *  along its dilation is added to it: dE/dS = kal (S - S0) / (2 S), so E =
+ *  kal/2 (S - S0 - S0 ln(S / S0)), kal = kal_weight, S0 = kal_area0 /
+ *  kal_weight. */
 template <class T>
-inline T local_area_coefficient(T area, T inv_moment, double kal_weight, double kal_area0) {
-  return (kal_weight * area - kal_area0) * inv_moment;
+inline T local_area_coefficient(const LocalAreaParams& p, T area, T inv_moment,
+                                T* energy = nullptr) {
+  if (energy && p.kal_weight != 0.0) {
+    const double area0 = p.kal_area0 / p.kal_weight;
+    for (int j = 0; j < lanes_of<T>; ++j) {
+      const double s = lane(area, j);
+      set_lane(*energy, j,
+               lane(*energy, j) + 0.5 * p.kal_weight * (s - area0 - area0 * std::log(s / area0)));
+    }
+  }
+  return (p.kal_weight * area - p.kal_area0) * inv_moment;
 }
 
 /** The cell's factor of eq. 6: each triangle's global area force is this
- *  factor times S inv_moment (T - X). Zero where kag is (also for a cell
- *  without a relaxed area). */
-template <class T> inline T global_area_factor(T cell_area, T kag, T area0) {
-  const Mask<T> on = kag != T{};
-  return select<T>(on, kag * (cell_area - area0) / select<T>(on, area0, splat<T>(1.0)), T{});
-}
-
-/** Local area energy of a triangle along its dilation: dE/dS = kal (S - S0) /
- *  (2 S), so E = kal/2 (S - S0 - S0 ln(S / S0)), with kal = kal_weight and
- *  S0 = kal_area0 / kal_weight. */
-inline double local_area_energy(double area, double kal_weight, double kal_area0) {
-  if (kal_weight == 0.0)
-    return 0.0;
-  const double area0 = kal_area0 / kal_weight;
-  return 0.5 * kal_weight * (area - area0 - area0 * std::log(area / area0));
-}
-
-/** Global area energy of a cell along its dilation: dE/dS = kag (S - S0) /
- *  (2 S0), so E = kag (S - S0)^2 / (4 S0). */
-inline double global_area_energy(double cell_area, double kag, double area0) {
-  if (kag == 0.0)
-    return 0.0;
-  const double ds = cell_area - area0;
-  return 0.25 * kag * ds * ds / area0;
+ *  factor times S inv_moment (T - X). Zero where kag is. With energy (not
+ *  null), the cell's global area energy along its dilation: dE/dS = kag (S -
+ *  S0) / (2 S0), so E = kag (S - S0)^2 / (4 S0). */
+template <class T>
+inline T global_area_factor(const GlobalAreaParams<T>& p, T cell_area, T* energy = nullptr) {
+  const Mask<T> on = p.kag != T{};
+  const T area0 = select<T>(on, p.area0, splat<T>(1.0));
+  const T ds = cell_area - area0;
+  if (energy)
+    *energy = select<T>(on, 0.25 * p.kag * ds * ds / area0, T{});
+  return select<T>(on, p.kag * ds / area0, T{});
 }
 
 } // namespace pyoif::membrane

@@ -20,8 +20,12 @@
 
 namespace pyoif::membrane {
 
+/** One pair's bending: the modulus and the relaxed angle, kept as psi0 = pi -
+ *  phi0 (cos psi0 = -cos phi0, sin psi0 = sin phi0) for the deviation. */
 struct BendingParams {
   double kb = 0.0;
+  double cos_psi0 = -1.0, sin_psi0 = 0.0; ///< phi0 = pi: a flat pair
+  static BendingParams of(double kb, double phi0) { return {kb, -std::cos(phi0), std::sin(phi0)}; }
 };
 
 /** The wings' normals n1 = u x e (triangle ABC) and n2 = e x w (BCD) of the
@@ -57,8 +61,8 @@ inline double dihedral_angle(const Vec3& a, const Vec3& b, const Vec3& c, const 
  *  (y, x) turned by psi0 = pi - phi0, cos psi0 = -cos phi0, sin psi0 = sin phi0. */
 template <class T> struct Deviation {
   T sine, cosine;
-  Deviation(T y, T x, double cos_psi0, double sin_psi0)
-      : sine(y * cos_psi0 - x * sin_psi0), cosine(x * cos_psi0 + y * sin_psi0) {}
+  Deviation(const BendingParams& p, T y, T x)
+      : sine(y * p.cos_psi0 - x * p.sin_psi0), cosine(x * p.cos_psi0 + y * p.sin_psi0) {}
   /** Whether the polynomial arctangent covers the deviation (|tan| <= 1/4,
    *  deviations below 14 degrees: most of a membrane's). */
   Mask<T> small() const { return (cosine > T{}) & (abs_of(sine) <= 0.25 * cosine); }
@@ -107,13 +111,16 @@ inline double bending_deviation(const Deviation<double>& d, bool small, double t
 
 /** The factors of the bending forces: F(A) = ca n1, F(D) = cd n2, and the
  *  foot points ta, td of A and D along the edge (fractions from B to C).
- *  inv_n1n2 = 1 / (|n1|^2 |n2|^2), inv_l2 = 1 / l^2. */
+ *  inv_n1n2 = 1 / (|n1|^2 |n2|^2), inv_l2 = 1 / l^2. With energy (not
+ *  null), kb/2 dphi^2 is added to it. */
 template <class T> struct BendingFactors {
   T ca, cd, ta, td;
   BendingFactors() = default;
-  BendingFactors(double kb, T dphi, T l, T inv_n1n2, const Wings<T>& g, T inv_l2, const T (&e)[3],
-                 const T (&u)[3], const T (&w)[3]) {
-    const T c = kb * dphi * l * inv_n1n2;
+  BendingFactors(const BendingParams& p, T dphi, T l, T inv_n1n2, const Wings<T>& g, T inv_l2,
+                 const T (&e)[3], const T (&u)[3], const T (&w)[3], T* energy = nullptr) {
+    if (energy)
+      *energy += 0.5 * p.kb * dphi * dphi;
+    const T c = p.kb * dphi * l * inv_n1n2;
     ca = c * g.n2_2;
     cd = c * g.n1_2;
     ta = (u[0] * e[0] + u[1] * e[1] + u[2] * e[2]) * inv_l2;
@@ -128,9 +135,5 @@ template <class T> struct BendingFactors {
     fc = -fe - (ta * fa + td * fd);
   }
 };
-
-template <class T> inline T bending_energy(double kb, T dphi) {
-  return 0.5 * kb * dphi * dphi;
-}
 
 } // namespace pyoif::membrane

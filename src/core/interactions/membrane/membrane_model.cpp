@@ -44,9 +44,12 @@ template <class F> void for_each_table(const Topology& t, F&& f) {
   for (const auto* v :
        {&t.tri_v0, &t.tri_v1, &t.tri_v2, &t.edge_b, &t.edge_a, &t.edge_c, &t.edge_d})
     f(*v);
-  for (const auto* v : {&t.kal_weight, &t.kal_area0, &t.closed_weight, &t.normal_weight, &t.r0,
-                        &t.inv_r0, &t.cos_psi0, &t.sin_psi0, &t.ks, &t.kslin, &t.kb, &t.kvisc})
+  for (const auto* v : {&t.closed_weight, &t.normal_weight})
     f(*v);
+  f(t.local_area);
+  f(t.stretching);
+  f(t.bending);
+  f(t.viscosity);
   f(t.has_normal);
 }
 
@@ -84,7 +87,7 @@ double keep(int selected, int term, double x) {
 /** The tables of one cell (its topology), its nodes' particle ids and its
  *  record. */
 void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, int term,
-                const ParticleStore& p, Topology& t, std::vector<int>& node_ids, Cell& cell) {
+                Topology& t, std::vector<int>& node_ids, Cell& cell) {
   cell.mol_id = bonds.mol_id;
   // nodes: the cell's particles in increasing id order (the cells of an
   // OifCellType are blocks of consecutive ids: the same numbers for all)
@@ -117,8 +120,9 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
       t.tri_v0.push_back(a);
       t.tri_v1.push_back(b);
       t.tri_v2.push_back(c);
-      for (auto* v : {&t.kal_weight, &t.kal_area0, &t.closed_weight, &t.normal_weight})
-        v->push_back(0.0);
+      t.local_area.push_back(LocalAreaParams{});
+      t.closed_weight.push_back(0.0);
+      t.normal_weight.push_back(0.0);
     }
     return it->second;
   };
@@ -126,16 +130,16 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
   // of its first triangle: the volume of an open mesh depends on it)
   for (const auto& [bond_id, b] : bonds.closed) {
     if (cell.global_bond_id >= 0 && cell.global_bond_id != bond_id)
-      throw InputError("the cell with mol_id " + std::to_string(cell.mol_id) +
-                       " has triangles of two OifGlobalForces interactions (bonded ids " +
-                       std::to_string(cell.global_bond_id) + " and " + std::to_string(bond_id) +
-                       "); a cell's surface and volume must come from one");
+      throw InputError(
+          "mol_id " + std::to_string(cell.mol_id) +
+          " has triangles of two OifGlobalForces interactions (bonded ids " +
+          std::to_string(cell.global_bond_id) + " and " + std::to_string(bond_id) +
+          "): a cell is the mol_id of its particles, and its surface and volume come from one "
+          "interaction; give each cell's particles a mol_id of their own");
     cell.global_bond_id = bond_id;
     const auto& ia = std::get<OifGlobalForces>(bonded[bond_id].interaction);
-    cell.kag = keep(term, global_area, ia.ka_g);
-    cell.kv = keep(term, volume, ia.kv);
-    cell.area0 = ia.A0_g > 0.0 ? ia.A0_g : 1.0;
-    cell.volume0 = ia.V0 > 0.0 ? ia.V0 : 1.0;
+    cell.global_area = {keep(term, global_area, ia.ka_g), ia.A0_g > 0.0 ? ia.A0_g : 1.0};
+    cell.volume = {keep(term, volume, ia.kv), ia.V0 > 0.0 ? ia.V0 : 1.0};
     const int* ids = bonded[bond_id].bonds.bond(b);
     const int q = triangle(node(ids[0]), node(ids[1]), node(ids[2]));
     if (t.closed_weight[q] != 0.0)
@@ -146,6 +150,8 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
     t.closed_weight[q] = 1.0;
   }
   for (const auto& [bond_id, b] : bonds.normals) {
+    if (cell.normals_bond_id < 0)
+      cell.normals_bond_id = bond_id;
     const int* ids = bonded[bond_id].bonds.bond(b);
     t.normal_weight[triangle(node(ids[0]), node(ids[1]), node(ids[2]))] = 1.0;
   }
@@ -163,39 +169,39 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
     t.edge_a.push_back(na);
     t.edge_c.push_back(nc);
     t.edge_d.push_back(nd);
-    t.r0.push_back(ref[0]);
-    t.inv_r0.push_back(1.0 / ref[0]);
-    t.cos_psi0.push_back(-std::cos(ref[1])); // psi0 = pi - phi0
-    t.sin_psi0.push_back(std::sin(ref[1]));
-    t.ks.push_back(keep(term, stretching, ia.ks));
-    t.kslin.push_back(keep(term, stretching, ia.kslin));
-    t.kb.push_back(keep(term, bending, ia.kb));
-    t.kvisc.push_back(keep(term, viscosity, ia.kvisc));
+    t.stretching.push_back(
+        {keep(term, stretching, ia.ks), keep(term, stretching, ia.kslin), ref[0], 1.0 / ref[0]});
+    t.bending.push_back(BendingParams::of(keep(term, bending, ia.kb), ref[1]));
+    t.viscosity.push_back({keep(term, viscosity, ia.kvisc)});
     const double kal = keep(term, local_area, ia.kal);
-    if (kal != 0.0) { // eq. 5: a third of kal (S - S0) on each of the bond's triangles
-      const int abc = triangle(na, nb, nc), bcd = triangle(nb, nc, nd);
-      t.kal_weight[abc] += kal / 3.0;
-      t.kal_area0[abc] += kal * ref[2] / 3.0;
-      t.kal_weight[bcd] += kal / 3.0;
-      t.kal_area0[bcd] += kal * ref[3] / 3.0;
+    if (kal != 0.0) { // a third of the local area term on each of the bond's triangles
+      LocalAreaParams& abc = t.local_area[triangle(na, nb, nc)];
+      abc.kal_weight += kal / 3.0;
+      abc.kal_area0 += kal * ref[2] / 3.0;
+      LocalAreaParams& bcd = t.local_area[triangle(nb, nc, nd)];
+      bcd.kal_weight += kal / 3.0;
+      bcd.kal_area0 += kal * ref[3] / 3.0;
     }
   }
-  auto any = [](const std::vector<double>& v) {
-    return std::any_of(v.begin(), v.end(), [](double x) { return x != 0.0; });
+  auto any = [](const auto& v, auto value) {
+    return std::any_of(v.begin(), v.end(), [&](const auto& x) { return value(x) != 0.0; });
   };
-  t.neo = any(t.ks);
-  t.visc = any(t.kvisc);
-  t.bend = any(t.kb);
-  t.edges = t.neo || t.visc || t.bend || any(t.kslin);
-  if (!t.edges)
+  t.neo = any(t.stretching, [](const StretchingParams& x) { return x.ks; });
+  t.visc = any(t.viscosity, [](const ViscosityParams& x) { return x.kvisc; });
+  t.bend = any(t.bending, [](const BendingParams& x) { return x.kb; });
+  t.edges = t.neo || t.visc || t.bend ||
+            any(t.stretching, [](const StretchingParams& x) { return x.kslin; });
+  if (!t.edges) {
     for (auto* v : {&t.edge_b, &t.edge_a, &t.edge_c, &t.edge_d})
       v->clear();
-  if (!t.edges)
-    for (auto* v : {&t.r0, &t.inv_r0, &t.cos_psi0, &t.sin_psi0, &t.ks, &t.kslin, &t.kb, &t.kvisc})
-      v->clear();
-  t.local_area = any(t.kal_weight);
-  t.closed = any(t.closed_weight);
-  t.normals = any(t.normal_weight);
+    t.stretching.clear();
+    t.bending.clear();
+    t.viscosity.clear();
+  }
+  auto itself = [](double x) { return x; };
+  t.has_local_area = any(t.local_area, [](const LocalAreaParams& x) { return x.kal_weight; });
+  t.closed = any(t.closed_weight, itself);
+  t.normals = any(t.normal_weight, itself);
   t.separate_sums = t.normals && t.closed_weight != t.normal_weight;
   const auto first_closed = std::find_if(t.closed_weight.begin(), t.closed_weight.end(),
                                          [](double w) { return w != 0.0; });
@@ -207,13 +213,13 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
     if (t.normal_weight[q] != 0.0)
       for (const int v : {t.tri_v0[q], t.tri_v1[q], t.tri_v2[q]})
         t.has_normal[v] = 1;
-  if (!t.local_area && !t.closed)
+  if (!t.has_local_area && !t.closed) {
     for (auto* v : {&t.tri_v0, &t.tri_v1, &t.tri_v2})
       v->clear();
-  if (!t.local_area && !t.closed)
-    for (auto* v : {&t.kal_weight, &t.kal_area0, &t.closed_weight, &t.normal_weight})
-      v->clear();
-  (void)p;
+    t.local_area.clear();
+    t.closed_weight.clear();
+    t.normal_weight.clear();
+  }
 }
 
 } // namespace
@@ -278,7 +284,7 @@ void Model::compile(const std::vector<BondedEntry>& bonded, const Selection& sel
   for (const CellBonds& bonds : by_cell) {
     Topology t;
     Cell cell;
-    build_cell(bonded, bonds, select.term, p, t, node_ids, cell);
+    build_cell(bonded, bonds, select.term, t, node_ids, cell);
     cell.node_begin = static_cast<int>(m_node_index.size());
     for (const int pid : node_ids)
       m_node_index.push_back(p.index(pid));
@@ -360,12 +366,14 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
 
 std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,
                                 const ParticleStore& p, const BoxGeometry& box, double time,
-                                Vec3* force, PassCounts* counts) {
+                                Vec3* force, std::vector<std::pair<int, int>>* nodes) {
   Model model;
   model.compile(bonded, select, p);
-  PassCounts local;
+  PassCounts counts;
   std::vector<CellReport> reports;
-  model.evaluate(p, box, time, force, nullptr, &reports, counts ? *counts : local);
+  model.evaluate(p, box, time, force, nullptr, &reports, counts);
+  if (nodes)
+    *nodes = model.nodes_by_id(p);
   return reports;
 }
 

@@ -16,25 +16,34 @@
 // A cell is the mol_id of a bond's first particle (the bond's owner): an
 // OifCellType's three interactions over one cell become one cell record, so
 // its nodes are gathered once and each triangle is visited once for the local
-// area (eq. 5), the cell's area and volume (eqs. 6, 7) and the node normals.
+// area, the cell's area and volume and the node normals.
 //
 // One evaluation (evaluate()), per group: gather the nodes' positions
 // (unfolded, relative to the cell's first node: exact for a cell of any size,
-// no minimum image per bond; a cell's nodes must have continuous unfolded
-// positions, as the integrator keeps them), the triangle pass, the cell's
-// factors of eqs. 6 and 7, the area forces, the edge pass (stretching,
-// viscosity, bending), then add the forces to the particles and write the
-// normals; with reports, also each cell's area, volume and energy per term.
-// A degenerate element or a non-finite force stops with a
-// SimulationInstability naming the cell, the particles and the time.
+// no minimum image per bond; where that spans more than half the box, as
+// when a script set a node's position to its folded value, relative by the
+// minimum image instead), the triangle pass, the cell's global area and
+// volume factors, the area forces, the edge pass (stretching, viscosity,
+// bending), then add the forces to the particles and write the normals; with
+// reports, also each cell's area, volume and energy per term. The terms'
+// equations are in their headers. A degenerate element or a non-finite
+// force stops with a SimulationInstability naming the bond's particles, the
+// cell and the time.
 //
-// Ownership under MPI (doc/architecture.md): a cell is evaluated whole, by
-// one rank; this data layout (cells of gathered node arrays in, node forces
-// and normals out) is what that model needs.
+// Ownership under MPI (doc/architecture.md, "Parallel model"): a cell will
+// be evaluated whole, by one rank; the driver already works on gathered
+// per-cell node arrays (positions in, forces and normals out), which the
+// domain decomposition will fill from local particles and received remote
+// nodes. Today every node of a cell must be a local particle.
 #pragma once
 
 #include "interactions/bonded/bonded_registry.hpp"
+#include "interactions/membrane/area.hpp"
+#include "interactions/membrane/bending.hpp"
 #include "interactions/membrane/lanes.hpp"
+#include "interactions/membrane/stretching.hpp"
+#include "interactions/membrane/viscosity.hpp"
+#include "interactions/membrane/volume.hpp"
 #include "particles/particle_store.hpp"
 #include "system/box_geometry.hpp"
 
@@ -81,24 +90,26 @@ struct PassCounts {
 struct Topology {
   int n_nodes = 0;
   int origin = 0; ///< cell-local node of the volume's reference point
-  // triangles: vertices; eq. 5's sums over the local bonds that have the
-  // triangle (area.hpp); whether it is one of the cell's closed surface
-  // (OifGlobalForces, or OifOutDirection without those: area, volume and
-  // orientation) and of its normals (OifOutDirection)
+  // triangles: vertices; their local area (area.hpp); whether each is one of
+  // the cell's closed surface (OifGlobalForces, or OifOutDirection without
+  // those: area, volume and orientation) and of its normals (OifOutDirection)
   std::vector<int> tri_v0, tri_v1, tri_v2;
-  std::vector<double> kal_weight, kal_area0, closed_weight, normal_weight;
+  std::vector<LocalAreaParams> local_area;
+  std::vector<double> closed_weight, normal_weight;
   // edges: the local bonds (B, A, C, D), edge BC, wings A and D, with their
-  // reference values (relaxed length; relaxed angle as psi0 = pi - phi0) and moduli
+  // terms' parameters and reference values
   std::vector<int> edge_b, edge_a, edge_c, edge_d;
-  std::vector<double> r0, inv_r0, cos_psi0, sin_psi0, ks, kslin, kb, kvisc;
+  std::vector<StretchingParams> stretching;
+  std::vector<BendingParams> bending;
+  std::vector<ViscosityParams> viscosity;
   std::vector<std::uint8_t> has_normal; ///< per node: in a normals triangle
   // the terms that occur: the pass's instantiation
   bool neo = false, visc = false, bend = false;
-  bool edges = false;         ///< an edge term is on (the edge pass runs)
-  bool local_area = false;    ///< eq. 5 on some triangle
-  bool closed = false;        ///< a closed surface: area, volume, orientation
-  bool normals = false;       ///< node normals
-  bool separate_sums = false; ///< closed and normal triangles differ: two node sums
+  bool edges = false;          ///< an edge term is on (the edge pass runs)
+  bool has_local_area = false; ///< local area on some triangle
+  bool closed = false;         ///< a closed surface: area, volume, orientation
+  bool normals = false;        ///< node normals
+  bool separate_sums = false;  ///< closed and normal triangles differ: two node sums
 };
 
 /** One cell (see the file comment). */
@@ -106,8 +117,9 @@ struct Cell {
   int mol_id = 0;
   int topology = 0;
   int node_begin = 0; ///< its nodes in Model::node_index, topology.n_nodes of them
-  double kag = 0.0, area0 = 1.0, kv = 0.0, volume0 = 1.0; ///< eqs. 6, 7
-  int local_bond_id = -1, global_bond_id = -1;            ///< for messages
+  GlobalAreaParams<> global_area{0.0, 1.0};
+  VolumeParams<> volume{0.0, 1.0};
+  int local_bond_id = -1, global_bond_id = -1, normals_bond_id = -1; ///< for messages
 };
 
 /** Cells evaluated together: one (lanes = 1) or up to four of one topology. */
@@ -141,6 +153,11 @@ private:
   template <class T, bool with_reports>
   void evaluate_group(const Group& group, const ParticleStore& p, const BoxGeometry& box,
                       double time, Vec3* force, Vec3* normal, std::vector<CellReport>* reports);
+  /** The nodes of `cell` (positions relative to its first node, and with v
+   *  the velocities) into lane j of the node arrays x and v. */
+  template <class Node>
+  void gather(const Cell& cell, int j, const ParticleStore& p, const BoxGeometry& box, Node* x,
+              Node* v) const;
   /** Throws the SimulationInstability that names what went wrong in `cell`
    *  (positions as gathered in lane `lane` of the workspace). */
   template <class T>
@@ -200,9 +217,10 @@ private:
 /** Analysis of the membrane bonds chosen by `select` (one interaction, one
  *  cell, one term), compiled anew and evaluated by the same driver as the
  *  time step: one report per cell; with force (may be null) the selected
- *  forces added to force[local index]. */
+ *  forces added to force[local index]; with nodes (may be null) the
+ *  selected cells' nodes (Model::nodes_by_id). */
 std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,
                                 const ParticleStore& p, const BoxGeometry& box, double time,
-                                Vec3* force, PassCounts* counts = nullptr);
+                                Vec3* force, std::vector<std::pair<int, int>>* nodes = nullptr);
 
 } // namespace pyoif::membrane

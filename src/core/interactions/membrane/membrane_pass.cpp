@@ -14,8 +14,6 @@
 #include "interactions/membrane/volume.hpp"
 #include "utils/errors.hpp"
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
 #include <sstream>
 #include <type_traits>
@@ -38,11 +36,11 @@ namespace {
  *  factors, then the forces) let the iterations overlap. */
 constexpr int kEdgeBlock = 16;
 
-/** Stretching (eq. 3), viscosity and bending (eq. 4) of every edge of the
- *  topology, added to the node forces f; x, v: the nodes' positions and
- *  velocities. With energies (non-null) the edges' stretching and bending
- *  energies are summed into them. Returns the lanes with a zero-length edge
- *  or (bending) a degenerate wing triangle. */
+/** Stretching, viscosity and bending of every edge of the topology, added
+ *  to the node forces f; x, v: the nodes' positions and velocities. With
+ *  energies (non-null) the edges' stretching and bending energies are summed
+ *  into them. Returns the lanes with a zero-length edge or (bending) a
+ *  degenerate wing triangle. */
 template <class T, bool neo, bool visc, bool bend, class Node>
 Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
                   T* stretching_energy_sum, T* bending_energy_sum) {
@@ -72,47 +70,43 @@ Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
           dv[d] = v[ec[k]].c[d] - v[eb[k]].c[d];
         out.e[d] = e[d];
       }
+      const StretchingParams& stretch = t.stretching[k];
       const T l2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
       bad |= not_positive(l2);
       const T l = sqrt_of(l2);
-      const T lambda = l * t.inv_r0[k];
+      const T lambda = l * stretch.inv_l0;
       // the four quotients of the edge: 1 / l^2, 1 / kappa's denominator,
       // the deviation's tangent, 1 / (|n1|^2 |n2|^2)
       T den[4] = {l2, splat<T>(1.0), splat<T>(1.0), splat<T>(1.0)};
       if constexpr (neo)
         den[1] = neo_hookean_denominator(lambda);
+      auto edge_coefficient = [&](const FourReciprocals<T>& r) {
+        T c = stretching_coefficient<neo>(stretch, l, lambda, r.inv[0], r.inv[1],
+                                          stretching_energy_sum);
+        if constexpr (visc)
+          c += viscosity_coefficient(t.viscosity[k], e, dv, r.inv[0]);
+        return c;
+      };
       if constexpr (bend) {
+        const BendingParams& bending = t.bending[k];
         const Wings<T> wings(e, u, w);
         bad |= not_positive(wings.n1_2) | not_positive(wings.n2_2);
-        const Deviation<T> dev(wings.y(l, w), wings.x(), t.cos_psi0[k], t.sin_psi0[k]);
+        const Deviation<T> dev(bending, wings.y(l, w), wings.x());
         const Mask<T> small = dev.small();
         den[2] = select<T>(small, dev.cosine, splat<T>(1.0));
         den[3] = wings.n1_2 * wings.n2_2;
         const FourReciprocals<T> r(den);
         const T dphi = bending_deviation(dev, small, dev.sine * r.inv[2]);
-        out.bending = BendingFactors<T>(t.kb[k], dphi, l, r.inv[3], wings, r.inv[0], e, u, w);
+        out.bending = BendingFactors<T>(bending, dphi, l, r.inv[3], wings, r.inv[0], e, u, w,
+                                        bending_energy_sum);
         for (int d = 0; d < 3; ++d) {
           out.n1[d] = wings.n1[d];
           out.n2[d] = wings.n2[d];
         }
-        out.coefficient = stretching_coefficient<neo>(l, lambda, r.inv[0], r.inv[1], t.r0[k],
-                                                      t.ks[k], t.kslin[k]);
-        if constexpr (visc)
-          out.coefficient += viscosity_coefficient(e, dv, r.inv[0], t.kvisc[k]);
-        if (bending_energy_sum)
-          *bending_energy_sum += bending_energy(t.kb[k], dphi);
+        out.coefficient = edge_coefficient(r);
       } else {
-        const FourReciprocals<T> r(den);
-        out.coefficient = stretching_coefficient<neo>(l, lambda, r.inv[0], r.inv[1], t.r0[k],
-                                                      t.ks[k], t.kslin[k]);
-        if constexpr (visc)
-          out.coefficient += viscosity_coefficient(e, dv, r.inv[0], t.kvisc[k]);
+        out.coefficient = edge_coefficient(FourReciprocals<T>(den));
       }
-      if (stretching_energy_sum)
-        for (int j = 0; j < lanes_of<T>; ++j)
-          set_lane(*stretching_energy_sum, j,
-                   lane(*stretching_energy_sum, j) +
-                       stretching_energy(lane(l, j), t.r0[k], t.ks[k], t.kslin[k]));
     }
     for (int i = 0; i < nb; ++i) {
       const int k = first + i;
@@ -176,33 +170,18 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
   Node *const x = ws.x.data(), *const v = ws.v.data(), *const f = ws.f.data();
   Node *const nsum = ws.nsum.data(), *const vsum = t.separate_sums ? ws.vsum.data() : nsum;
 
-  // gather: each node unfolded relative to its cell's first node, the image
-  // difference first (integers, exact: no rounding that grows with the
-  // number of boxes a cell has travelled)
-  T kag{}, area0{}, kv{}, volume0{};
-  const Vec3& box_l = box.length();
+  // gather, cell by cell (lane by lane), and the cells' parameters
+  GlobalAreaParams<T> global{};
+  VolumeParams<T> vol{};
   for (int j = 0; j < kLanes; ++j) {
     const Cell& cell = m_cells[group.cell[j]];
-    set_lane(kag, j, cell.kag);
-    set_lane(area0, j, cell.area0);
-    set_lane(kv, j, cell.kv);
-    set_lane(volume0, j, cell.volume0);
-    const int* const index = m_node_index.data() + cell.node_begin;
-    const Vec3 pos_r = p.pos[index[0]];
-    const Vec3i image_r = p.image[index[0]];
-    for (int k = 0; k < n; ++k) {
-      const int i = index[k];
-      const Vec3 xk =
-          (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(box_l);
-      for (int d = 0; d < 3; ++d)
-        set_lane(x[k].c[d], j, xk[d]);
-    }
-    if (t.visc)
-      for (int k = 0; k < n; ++k)
-        for (int d = 0; d < 3; ++d)
-          set_lane(v[k].c[d], j, p.vel[index[k]][d]);
+    set_lane(global.kag, j, cell.global_area.kag);
+    set_lane(global.area0, j, cell.global_area.area0);
+    set_lane(vol.kv, j, cell.volume.kv);
+    set_lane(vol.volume0, j, cell.volume.volume0);
+    gather(cell, j, p, box, x, t.visc ? v : nullptr);
   }
-  const bool volume_forces = t.closed && any_lane<T>(kv != T{});
+  const bool volume_forces = t.closed && any_lane<T>(vol.kv != T{});
   const bool node_sums = t.normals || volume_forces;
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d) {
@@ -212,11 +191,14 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
     }
 
   // triangle pass: per triangle N, its area and volume term and the
-  // centroid allocation's scale (area.hpp), the local area coefficient
-  // (eq. 5), the global area's direction factor (eq. 6; the cell's factor
-  // applies once the cell's area is known), the cell's area and volume, and
-  // per node the sums of N of its closed and its normals' triangles
+  // centroid allocation's scale (area.hpp), the local area coefficient, the
+  // global area's direction factor (the cell's factor applies once the
+  // cell's area is known), the cell's area and volume, and per node the
+  // sums of N of its closed and of its normals' triangles. A closed
+  // triangle of no area is an error where the cell has global terms.
   T area_sum{}, volume_sum{}, local_area_energy_sum{};
+  T* const local_area_energy = with_reports ? &local_area_energy_sum : nullptr;
+  const Mask<T> closed_terms = (global.kag != T{}) | (vol.kv != T{});
   Mask<T> bad = no_lane<T>();
   if (n_tri > 0) {
     const Node origin = x[t.origin];
@@ -229,13 +211,16 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
         ra[d] = a.c[d] - origin.c[d];
       }
       const TriangleGeometry<T> tri(e1, e2, ra);
-      const double kal_weight = t.kal_weight[q], closed = t.closed_weight[q];
-      if (kal_weight != 0.0)
+      const LocalAreaParams& local = t.local_area[q];
+      const double closed = t.closed_weight[q];
+      if (local.kal_weight != 0.0)
         bad |= not_positive(tri.area);
+      if (closed != 0.0)
+        bad |= not_positive(tri.area) & closed_terms;
       area_sum += closed * tri.area;
       volume_sum += closed * tri.volume_term;
       ws.g[q] = closed * tri.area * tri.inv_moment;
-      ws.coef[q] = local_area_coefficient(tri.area, tri.inv_moment, kal_weight, t.kal_area0[q]);
+      ws.coef[q] = local_area_coefficient(local, tri.area, tri.inv_moment, local_area_energy);
       if (node_sums) {
         const double w = t.separate_sums ? t.normal_weight[q] : closed;
         for (int d = 0; d < 3; ++d) {
@@ -251,21 +236,18 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
           }
         }
       }
-      if constexpr (with_reports)
-        if (kal_weight != 0.0)
-          for (int j = 0; j < kLanes; ++j)
-            set_lane(local_area_energy_sum, j,
-                     lane(local_area_energy_sum, j) +
-                         local_area_energy(lane(tri.area, j), kal_weight, t.kal_area0[q]));
     }
   }
-  // the cell's factors of eqs. 6 and 7
+  // the cells' global area and volume factors
   const T cell_volume = volume_sum / 6.0;
   const T sign = orientation_sign(cell_volume);
-  const T area_factor = global_area_factor(area_sum, kag, area0);
-  const T vol_factor = volume_factor(cell_volume, sign, kv, volume0);
-  // area forces (eqs. 5, 6) along the centroid offsets
-  if (t.local_area || any_lane<T>(area_factor != T{}))
+  T global_area_energy{}, volume_energy{};
+  const T area_factor =
+      global_area_factor(global, area_sum, with_reports ? &global_area_energy : nullptr);
+  const T vol_factor =
+      volume_factor(vol, cell_volume, sign, with_reports ? &volume_energy : nullptr);
+  // area forces (local and global) along the centroid offsets
+  if (t.has_local_area || any_lane<T>(area_factor != T{}))
     for (int q = 0; q < n_tri; ++q) {
       const T cq = ws.coef[q] + area_factor * ws.g[q];
       const Node &a = x[t.tri_v0[q]], &b = x[t.tri_v1[q]], &c = x[t.tri_v2[q]];
@@ -281,7 +263,7 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
   if (t.edges)
     bad |= edge_pass_for<T>(t, x, v, f, with_reports ? &stretching_energy_sum : nullptr,
                             with_reports ? &bending_energy_sum : nullptr);
-  // per node: the volume force along its sum of N (eq. 7), all finite
+  // per node: the volume force along its sum of N, all finite
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d) {
       if (volume_forces)
@@ -306,8 +288,8 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
       r.energy[stretching] = lane(stretching_energy_sum, j);
       r.energy[bending] = lane(bending_energy_sum, j);
       r.energy[local_area] = lane(local_area_energy_sum, j);
-      r.energy[global_area] = global_area_energy(r.area, cell.kag, cell.area0);
-      r.energy[volume] = volume_energy(r.volume, cell.kv, cell.volume0);
+      r.energy[global_area] = lane(global_area_energy, j);
+      r.energy[volume] = lane(volume_energy, j);
     }
   }
   if (normal && t.normals)
@@ -328,6 +310,56 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
     }
 }
 
+template <class Node>
+void Model::gather(const Cell& cell, int j, const ParticleStore& p, const BoxGeometry& box, Node* x,
+                   Node* v) const {
+  const int n = m_topologies[cell.topology].n_nodes;
+  const int* const index = m_node_index.data() + cell.node_begin;
+  const Vec3 pos_r = p.pos[index[0]];
+  const Vec3i image_r = p.image[index[0]];
+  const Vec3& box_l = box.length();
+  // each node unfolded relative to the cell's first node, the image
+  // difference first (integers, exact: no rounding that grows with the
+  // number of boxes a cell has travelled)
+  Vec3 low = Vec3::Zero(), high = Vec3::Zero();
+  for (int k = 0; k < n; ++k) {
+    const int i = index[k];
+    const Vec3 xk = (p.pos[i] - pos_r) + (p.image[i] - image_r).cast<double>().cwiseProduct(box_l);
+    low = low.cwiseMin(xk);
+    high = high.cwiseMax(xk);
+    for (int d = 0; d < 3; ++d)
+      set_lane(x[k].c[d], j, xk[d]);
+  }
+  auto wider_than_half = [&](const Vec3& lo, const Vec3& hi) {
+    for (int d = 0; d < 3; ++d)
+      if (box.periodic()[d] && hi[d] - lo[d] > 0.5 * box_l[d])
+        return true;
+    return false;
+  };
+  if (wider_than_half(low, high)) {
+    // unfolded, the cell spans more than half the box: either it is that
+    // large, or a node's unfolded position jumped (a script set it to its
+    // folded value). Relative by the minimum image, a cell smaller than half
+    // the box comes out whole: take that where it does.
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+    for (int k = 0; k < n; ++k) {
+      const Vec3 xk = box.minimum_image(p.pos[index[k]], pos_r);
+      lo = lo.cwiseMin(xk);
+      hi = hi.cwiseMax(xk);
+    }
+    if (!wider_than_half(lo, hi))
+      for (int k = 0; k < n; ++k) {
+        const Vec3 xk = box.minimum_image(p.pos[index[k]], pos_r);
+        for (int d = 0; d < 3; ++d)
+          set_lane(x[k].c[d], j, xk[d]);
+      }
+  }
+  if (v)
+    for (int k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d)
+        set_lane(v[k].c[d], j, p.vel[index[k]][d]);
+}
+
 template <class T>
 void Model::report_failure(const Group& group, int j, const ParticleStore& p, double time) const {
   using Node = typename Workspace<T>::Node;
@@ -336,41 +368,64 @@ void Model::report_failure(const Group& group, int j, const ParticleStore& p, do
   const Workspace<T>& ws = const_cast<Model*>(this)->workspace<T>();
   const int* const index = m_node_index.data() + cell.node_begin;
   auto pid = [&](int k) { return p.id[index[k]]; };
-  auto at = [&](const Node& node) {
-    return Vec3(lane(node.c[0], j), lane(node.c[1], j), lane(node.c[2], j));
+  auto at = [&](const Node& node, double(&out)[3]) {
+    for (int d = 0; d < 3; ++d)
+      out[d] = lane(node.c[d], j);
+  };
+  auto difference = [&](int from, int to, double(&out)[3]) {
+    double a[3], b[3];
+    at(ws.x[from], a);
+    at(ws.x[to], b);
+    for (int d = 0; d < 3; ++d)
+      out[d] = b[d] - a[d];
+  };
+  auto where = [&](int bond_id) {
+    return " (bonded interaction " + std::to_string(bond_id) + ", the cell with mol_id " +
+           std::to_string(cell.mol_id) + ")";
   };
   std::ostringstream msg;
-  const std::string where = " (bonded interaction " + std::to_string(cell.local_bond_id) +
-                            ", the cell with mol_id " + std::to_string(cell.mol_id) + ")";
+  // the checks of the pass, on the cell's gathered positions
   for (std::size_t k = 0; k < t.edge_b.size(); ++k) {
-    const Vec3 b = at(ws.x[t.edge_b[k]]), a = at(ws.x[t.edge_a[k]]), c = at(ws.x[t.edge_c[k]]),
-               d = at(ws.x[t.edge_d[k]]);
-    const bool zero_edge = !((c - b).squaredNorm() > 0.0);
-    const bool flat_wing = t.bend && (!((a - b).cross(c - b).squaredNorm() > 0.0) ||
-                                      !((c - b).cross(d - b).squaredNorm() > 0.0));
+    double e[3], u[3], w[3];
+    difference(t.edge_b[k], t.edge_c[k], e);
+    difference(t.edge_b[k], t.edge_a[k], u);
+    difference(t.edge_b[k], t.edge_d[k], w);
+    const bool zero_edge = not_positive(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    const Wings<double> wings(e, u, w);
+    const bool flat_wing = t.bend && (not_positive(wings.n1_2) || not_positive(wings.n2_2));
     if (zero_edge || flat_wing) {
       msg << "OifLocalForces bond between particles " << pid(t.edge_b[k]) << ' ' << pid(t.edge_a[k])
-          << ' ' << pid(t.edge_c[k]) << ' ' << pid(t.edge_d[k]) << where << " broke at time "
-          << time << ": "
+          << ' ' << pid(t.edge_c[k]) << ' ' << pid(t.edge_d[k]) << where(cell.local_bond_id)
+          << " broke at time " << time << ": "
           << (zero_edge ? "its edge has zero length" : "one of its triangles has zero area");
       throw SimulationInstability(msg.str());
     }
   }
+  const bool closed_terms = cell.global_area.kag != 0.0 || cell.volume.kv != 0.0;
   for (std::size_t q = 0; q < t.tri_v0.size(); ++q) {
-    const Vec3 a = at(ws.x[t.tri_v0[q]]), b = at(ws.x[t.tri_v1[q]]), c = at(ws.x[t.tri_v2[q]]);
-    if (t.kal_weight[q] != 0.0 && !((b - a).cross(c - a).squaredNorm() > 0.0)) {
-      msg << "OifLocalForces" << where << ": the triangle of particles " << pid(t.tri_v0[q]) << ' '
-          << pid(t.tri_v1[q]) << ' ' << pid(t.tri_v2[q]) << " has zero area at time " << time
-          << " (local area, eq. 5)";
+    double e1[3], e2[3];
+    const double zero[3] = {0.0, 0.0, 0.0};
+    difference(t.tri_v0[q], t.tri_v1[q], e1);
+    difference(t.tri_v0[q], t.tri_v2[q], e2);
+    const bool flat = not_positive(TriangleGeometry<double>(e1, e2, zero).area);
+    const bool local = t.local_area[q].kal_weight != 0.0;
+    if (flat && (local || (closed_terms && t.closed_weight[q] != 0.0))) {
+      msg << (local ? "OifLocalForces" : "OifGlobalForces") << " triangle of particles "
+          << pid(t.tri_v0[q]) << ' ' << pid(t.tri_v1[q]) << ' ' << pid(t.tri_v2[q])
+          << where(local ? cell.local_bond_id : cell.global_bond_id) << " has zero area at time "
+          << time << " (a collapsed triangle: reduce the time step or the forces on the cell)";
       throw SimulationInstability(msg.str());
     }
   }
   int worst = 0;
-  for (int k = 0; k < t.n_nodes; ++k)
-    if (!at(ws.f[k]).allFinite()) {
+  for (int k = 0; k < t.n_nodes; ++k) {
+    double fk[3];
+    at(ws.f[k], fk);
+    if (not_finite(fk[0]) || not_finite(fk[1]) || not_finite(fk[2])) {
       worst = k;
       break;
     }
+  }
   msg << "the membrane forces of the cell with mol_id " << cell.mol_id
       << " (bonded interactions: local " << cell.local_bond_id << ", global " << cell.global_bond_id
       << ") are not finite at particle " << pid(worst) << " at time " << time

@@ -14,9 +14,12 @@
 
 namespace pyoif::membrane {
 
+/** One edge's stretching: the moduli and the relaxed length l0. */
 struct StretchingParams {
-  double ks = 0.0;    ///< neo-Hookean modulus
-  double kslin = 0.0; ///< linear modulus
+  double ks = 0.0;     ///< neo-Hookean modulus
+  double kslin = 0.0;  ///< linear modulus
+  double l0 = 1.0;     ///< relaxed length
+  double inv_l0 = 1.0; ///< 1 / l0 (lambda = l / l0 without a division)
 };
 
 /** kappa's denominator lambda^4 + 1 (kappa written as sqrt(lambda)
@@ -28,18 +31,12 @@ template <class T> inline T neo_hookean_denominator(T lambda) {
 }
 
 /** The coefficient c of the force c (B - A) on A: eq. 3 divided by l, for
- *  the moduli that are on (neo: ks may be non-zero). inv_l2 = 1 / l^2,
- *  inv_kappa_denominator = 1 / neo_hookean_denominator(lambda). */
+ *  the moduli that are on (neo: ks may be non-zero). lambda = l / l0,
+ *  inv_l2 = 1 / l^2, inv_kappa_denominator = 1 / neo_hookean_denominator.
+ *  With energy (not null), the edge's energy is added to it. */
 template <bool neo, class T>
-inline T stretching_coefficient(T l, T lambda, T inv_l2, T inv_kappa_denominator, double l0,
-                                double ks, double kslin) {
-  const T stretch = (l - l0) * l * inv_l2; // (l - l0) / l
-  T c = kslin * stretch;
-  if constexpr (neo)
-    c +=
-        ks * (sqrt_of(lambda) * (lambda * lambda * lambda + 1.0) * inv_kappa_denominator) * stretch;
-  return c;
-}
+inline T stretching_coefficient(const StretchingParams& p, T l, T lambda, T inv_l2,
+                                T inv_kappa_denominator, T* energy = nullptr);
 
 /** I(lambda) = integral of kappa(s) (s - 1) ds from 1 to lambda. With s = u^2
  *  the integrand is the rational function 2 (u^2 - 1) + 2 (u^2 - 1)^2 /
@@ -69,13 +66,27 @@ inline double neo_hookean_energy_integral(double lambda) {
   return 2.0 * (u * u * u / 3.0 - u + 2.0 / 3.0) + h * sum;
 }
 
-/** The edge's stretching energy (analysis only: the quadrature costs more
- *  than the force). */
-inline double stretching_energy(double l, double l0, double ks, double kslin) {
-  double e = 0.5 * kslin * (l - l0) * (l - l0);
-  if (ks != 0.0)
-    e += ks * l0 * l0 * neo_hookean_energy_integral(l / l0);
+/** The edge's stretching energy (the quadrature costs more than the force:
+ *  analysis only). */
+inline double stretching_energy(const StretchingParams& p, double l) {
+  double e = 0.5 * p.kslin * (l - p.l0) * (l - p.l0);
+  if (p.ks != 0.0)
+    e += p.ks * p.l0 * p.l0 * neo_hookean_energy_integral(l * p.inv_l0);
   return e;
+}
+
+template <bool neo, class T>
+inline T stretching_coefficient(const StretchingParams& p, T l, T lambda, T inv_l2,
+                                T inv_kappa_denominator, T* energy) {
+  const T stretch = (l - p.l0) * l * inv_l2; // (l - l0) / l
+  T c = p.kslin * stretch;
+  if constexpr (neo)
+    c += p.ks * (sqrt_of(lambda) * (lambda * lambda * lambda + 1.0) * inv_kappa_denominator) *
+         stretch;
+  if (energy)
+    for (int j = 0; j < lanes_of<T>; ++j)
+      set_lane(*energy, j, lane(*energy, j) + stretching_energy(p, lane(l, j)));
+  return c;
 }
 
 } // namespace pyoif::membrane

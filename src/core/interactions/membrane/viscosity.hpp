@@ -14,8 +14,9 @@ struct ViscosityParams {
 /** The coefficient c of the force c (B - A) on A; dv = v_B - v_A, e = B - A,
  *  inv_l2 = 1 / |e|^2. */
 template <class T>
-inline T viscosity_coefficient(const T (&e)[3], const T (&dv)[3], T inv_l2, double kvisc) {
-  return kvisc * (dv[0] * e[0] + dv[1] * e[1] + dv[2] * e[2]) * inv_l2;
+inline T viscosity_coefficient(const ViscosityParams& p, const T (&e)[3], const T (&dv)[3],
+                               T inv_l2) {
+  return p.kvisc * (dv[0] * e[0] + dv[1] * e[1] + dv[2] * e[2]) * inv_l2;
 }
 
 } // namespace pyoif::membrane

@@ -11,13 +11,12 @@
 
 #include "interactions/membrane/lanes.hpp"
 
-#include <cmath>
-
 namespace pyoif::membrane {
 
-struct VolumeParams {
-  double kv = 0.0;
-  double volume0 = 0.0; ///< the cell's relaxed volume V0
+/** A cell's volume term (eq. 7); T: double, or Lanes for four cells. */
+template <class T = double> struct VolumeParams {
+  T kv{};
+  T volume0{}; ///< the cell's relaxed volume V0 (> 0 where kv is not 0)
 };
 
 /** -1 where the oriented volume is negative (inward triangle order), else +1. */
@@ -26,18 +25,16 @@ template <class T> inline T orientation_sign(T volume) {
 }
 
 /** The cell's factor of eq. 7: a node's volume force is this factor times
- *  the sum of N over its triangles. Zero where kv is. */
-template <class T> inline T volume_factor(T volume, T sign, T kv, T volume0) {
-  const Mask<T> on = kv != T{};
-  const T v0 = select<T>(on, volume0, splat<T>(1.0));
-  return select<T>(on, -kv * ((sign * volume - v0) / v0) * sign / 6.0, T{});
-}
-
-inline double volume_energy(double volume, double kv, double volume0) {
-  if (kv == 0.0)
-    return 0.0;
-  const double dv = std::abs(volume) - volume0;
-  return 0.5 * kv * dv * dv / volume0;
+ *  the sum of N over its triangles. Zero where kv is. With energy (not
+ *  null), the cell's energy kv/2 (|V| - V0)^2 / V0. */
+template <class T>
+inline T volume_factor(const VolumeParams<T>& p, T volume, T sign, T* energy = nullptr) {
+  const Mask<T> on = p.kv != T{};
+  const T v0 = select<T>(on, p.volume0, splat<T>(1.0));
+  const T dv = sign * volume - v0;
+  if (energy)
+    *energy = select<T>(on, 0.5 * p.kv * dv * dv / v0, T{});
+  return select<T>(on, -p.kv * (dv / v0) * sign / 6.0, T{});
 }
 
 } // namespace pyoif::membrane
