@@ -173,7 +173,8 @@ public:
    *  breakdown after each run). total: all of integrate(); the phases are
    *  parts of it, the rest (velocity Verlet, neighbour rebuilds, checks) is
    *  total minus their sum. Force computations outside runs are not
-   *  counted. Seven clock reads per step: nothing against a step's cost. */
+   *  counted. Six clock reads per step (eight with a lattice update):
+   *  nothing against a step's cost. */
   struct RunTimings {
     std::uint64_t steps = 0;
     double total = 0.0, membrane = 0.0, bonded = 0.0, non_bonded = 0.0, constraints = 0.0,

@@ -150,8 +150,6 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
     t.closed_weight[q] = 1.0;
   }
   for (const auto& [bond_id, b] : bonds.normals) {
-    if (cell.normals_bond_id < 0)
-      cell.normals_bond_id = bond_id;
     const int* ids = bonded[bond_id].bonds.bond(b);
     t.normal_weight[triangle(node(ids[0]), node(ids[1]), node(ids[2]))] = 1.0;
   }

@@ -119,7 +119,7 @@ struct Cell {
   int node_begin = 0; ///< its nodes in Model::node_index, topology.n_nodes of them
   GlobalAreaParams<> global_area{0.0, 1.0};
   VolumeParams<> volume{0.0, 1.0};
-  int local_bond_id = -1, global_bond_id = -1, normals_bond_id = -1; ///< for messages
+  int local_bond_id = -1, global_bond_id = -1; ///< for messages
 };
 
 /** Cells evaluated together: one (lanes = 1) or up to four of one topology. */
@@ -137,9 +137,6 @@ public:
   void compile(const std::vector<BondedEntry>& bonded, const Selection& select,
                const ParticleStore& p);
   bool empty() const { return m_cells.empty(); }
-  const std::vector<Cell>& cells() const { return m_cells; }
-  const std::vector<Topology>& topologies() const { return m_topologies; }
-  const std::vector<Group>& groups() const { return m_groups; }
   /** (particle id, local index) of all cells' nodes, each once, by id. */
   std::vector<std::pair<int, int>> nodes_by_id(const ParticleStore& p) const;
 

@@ -187,7 +187,8 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
     for (int d = 0; d < 3; ++d) {
       f[k].c[d] = T{};
       nsum[k].c[d] = T{};
-      vsum[k].c[d] = T{};
+      if (t.separate_sums)
+        vsum[k].c[d] = T{};
     }
 
   // triangle pass: per triangle N, its area and volume term and the
