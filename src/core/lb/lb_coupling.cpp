@@ -32,36 +32,84 @@ using CompactStencil = LBFluid::CouplingLedger::Stencil;
                               std::to_string(pos[2]) + ") is not finite or far outside the box");
 }
 
-inline CompactStencil compact_stencil(const LBFluid& fluid, const Vec3& pos) {
+/** Where this rank's subdomain lies, for the stencils: on an axis the
+ *  decomposition does not split, the stencil wraps round the box onto this
+ *  rank's own nodes (as on one rank); on a split axis it is placed in this
+ *  rank's padded coordinates, where a stencil that touches the subdomain
+ *  lies within the ghost layer. */
+struct StencilFrame {
+  int lower[3], local[3], global[3];
+  bool split[3];
+  bool any_split;
+  explicit StencilFrame(const LBFluid& fluid) {
+    any_split = false;
+    for (int d = 0; d < 3; ++d) {
+      lower[d] = fluid.local_origin()[d];
+      local[d] = fluid.local_grid()[d];
+      global[d] = fluid.grid()[d];
+      split[d] = local[d] != global[d];
+      any_split |= split[d];
+    }
+  }
+};
+
+/** A stencil's key when no node of it is this rank's (another rank
+ *  couples that particle). */
+constexpr std::uint64_t not_here = ~std::uint64_t{0};
+
+/** The stencil of pos; base_owned: its first node is this rank's (this rank
+ *  gives the particle its force). key not_here: no node is this rank's. */
+inline CompactStencil compact_stencil(const LBFluid& fluid, const StencilFrame& frame,
+                                      const Vec3& pos, bool& base_owned) {
   const double inv_agrid = 1.0 / fluid.agrid();
-  const Vec3i& n = fluid.grid();
   int lo[3];
   CompactStencil s;
+  std::uint64_t wraps = 0;
+  base_owned = true;
   for (int d = 0; d < 3; ++d) {
     const double x = pos[d] * inv_agrid - 0.5;
     if (!(std::abs(x) < 1e9)) // NaN or flown away: no index to compute
       throw_bad_position(pos);
     const double fl = std::floor(x);
     s.frac[d] = x - fl;
-    lo[d] = wrap_node(static_cast<int>(fl), n[d]);
+    const int n = frame.global[d];
+    if (!frame.split[d]) {
+      lo[d] = wrap_node(static_cast<int>(fl), n);
+      wraps |= std::uint64_t{lo[d] + 1 >= n} << d;
+      continue;
+    }
+    // local coordinate of the first node, periodically in [-1, n - 1)
+    int l = wrap_node(static_cast<int>(fl) - frame.lower[d] + 1, n) - 1;
+    if (l > frame.local[d] - 1) {
+      s.key = not_here;
+      base_owned = false;
+      return s;
+    }
+    base_owned &= l >= 0;
+    lo[d] = l;
   }
-  std::uint64_t wraps = 0;
-  for (int d = 0; d < 3; ++d)
-    wraps |= std::uint64_t{lo[d] + 1 >= n[d]} << d;
   s.key = (std::uint64_t{fluid.padded_index_in_box(lo[0], lo[1], lo[2])} << 3) | wraps;
   return s;
 }
 
 } // namespace
 
-Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
+Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& pos) {
   // the 8 nodes around pos and their trilinear weights; node (i, j, k) sits
-  // at ((i, j, k) + 1/2) agrid
-  const CompactStencil s = compact_stencil(fluid, box.folded(pos));
-  const auto steps = fluid.stencil_steps();
+  // at ((i, j, k) + 1/2) agrid. Decomposed: computed by the rank of the
+  // first node, summed over the ranks (collective).
+  fluid.refresh_ghost_velocities();
+  const StencilFrame frame(fluid);
+  bool base_owned = false;
+  const CompactStencil s = compact_stencil(fluid, frame, box.folded(pos), base_owned);
   Vec3 u = Vec3::Zero();
-  for (int m = 0; m < 8; ++m)
-    u += s.weight(m) * fluid.velocity_at_index(steps.node(s, m));
+  if (base_owned) {
+    const auto steps = fluid.stencil_steps();
+    for (int m = 0; m < 8; ++m)
+      u += s.weight(m) * fluid.coupling_velocity(steps.node(s, m));
+  }
+  if (fluid.distributed())
+    MPI_Allreduce(MPI_IN_PLACE, u.data(), 3, MPI_DOUBLE, MPI_SUM, fluid.domain().comm());
   return u;
 }
 
@@ -106,6 +154,18 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     if (outside)
       throw_outside(p, box);
   }
+  // Decomposed lattice (particles held by every rank): each rank couples
+  // the particles whose stencils touch its subdomain, in the same order as
+  // one rank would, deposits on its own nodes only, and the rank of a
+  // stencil's first node gives the particle its force (one sum over the
+  // ranks, where that rank alone contributes: exact). So every node receives
+  // the serial deposits in the serial order, and every particle the serial
+  // force, bit for bit.
+  const StencilFrame frame(fluid);
+  const bool split = frame.any_split;
+  if (split)
+    fluid.refresh_ghost_velocities();
+  auto mine = [&](std::size_t node) { return !split || fluid.is_domain_node(node); };
   auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
@@ -118,9 +178,14 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (same_step) // the last pass's stencils are still in the ledger
     for (std::size_t i = 0; i < ledger.last_impulse.size(); ++i) {
       const CompactStencil& s = ledger.stencils[i];
+      if (s.key == not_here)
+        continue;
       const Vec3 retract = -0.5 * scale * ledger.last_impulse[i];
-      for (int m = 0; m < 8; ++m)
-        fluid.add_field_impulse(steps.node(s, m), s.weight(m) * retract);
+      for (int m = 0; m < 8; ++m) {
+        const std::size_t node = steps.node(s, m);
+        if (mine(node))
+          fluid.add_field_impulse(node, s.weight(m) * retract);
+      }
     }
   ledger.any = true;
   ledger.step = step;
@@ -167,12 +232,16 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (ledger.node.size() < n_listed + 8 * n + 1) // room for every node to be new
     ledger.node.resize(n_listed + 8 * n + 1);
   std::size_t* node_list = ledger.node.data();
+  std::vector<std::uint8_t>& gives_force = ledger.gives_force;
+  gives_force.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const CompactStencil s = compact_stencil(fluid, p.pos[i]);
+    bool base_owned;
+    const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned);
+    gives_force[i] = base_owned;
     const CompactStencil& old = stencils[i];
     const bool moved = renumber || s.key != old.key;
     stencils[i] = s;
-    if (!moved)
+    if (!moved || s.key == not_here)
       continue;
     for (int m = 0; m < 8; ++m) {
       const std::size_t node = steps.node(s, m);
@@ -202,9 +271,14 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
-  Vec3 impulse_sum = Vec3::Zero();
+  std::vector<Vec3>& coupling_force = ledger.coupling_force;
+  coupling_force.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const CompactStencil& s = stencils[i];
+    if (s.key == not_here) {
+      coupling_force[i].setZero();
+      continue;
+    }
     const std::uint32_t* k = entries + 8 * i;
     double weight[8];
     Vec3 u = Vec3::Zero();
@@ -218,12 +292,20 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       for (int d = 0; d < 3; ++d)
         f[d] += noise * random::normal(key, d);
     }
-    p.force[i] += f;
+    coupling_force[i] = gives_force[i] ? f : Vec3::Zero();
     // the fluid gets -F time_step of momentum per MD step, applied at its next update
     const Vec3 impulse = -time_step * f;
     const Vec3 spread = (scale * fraction) * impulse;
     for (int m = 0; m < 8; ++m)
       state[k[m]].impulse += weight[m] * spread;
+  }
+  if (split)
+    MPI_Allreduce(MPI_IN_PLACE, coupling_force.data(), static_cast<int>(3 * n), MPI_DOUBLE, MPI_SUM,
+                  fluid.domain().comm());
+  Vec3 impulse_sum = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    p.force[i] += coupling_force[i];
+    const Vec3 impulse = -time_step * coupling_force[i];
     ledger.last_impulse[i] = impulse;
     impulse_sum += impulse;
   }
@@ -239,7 +321,8 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       __builtin_prefetch(&state[compact[later]].impulse, 0, 3);
     }
     const std::size_t node = node_list[j];
-    fluid.add_field_impulse(node, state[compact[node]].impulse);
+    if (mine(node)) // a ghost's deposit is its owner's (who made the same)
+      fluid.add_field_impulse(node, state[compact[node]].impulse);
   }
   ledger.in_flight = 0.5 * impulse_sum;
 }

@@ -27,7 +27,8 @@ struct CouplingParams {
 void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
                       const CouplingParams& params, std::uint64_t step, double time_step);
 
-/** Fluid velocity at pos (MD units), trilinear in the 8 surrounding nodes. */
-Vec3 interpolated_velocity(const LBFluid& fluid, const BoxGeometry& box, const Vec3& pos);
+/** Fluid velocity at pos (MD units), trilinear in the 8 surrounding nodes;
+ *  collective on a decomposed lattice. */
+Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& pos);
 
 } // namespace pyoif::lb

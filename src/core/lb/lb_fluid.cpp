@@ -50,7 +50,9 @@ double equilibrium(int q, double rho, const Vec3& u) {
 
 } // namespace
 
-LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.length()) {
+LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box, MPI_Comm comm, const Vec3i& node_grid,
+                 bool balance_fluid)
+    : m_p(p), m_box(box.length()), m_grid(Vec3i::Ones()), m_balance(balance_fluid) {
   auto finite_positive = [](double x) { return std::isfinite(x) && x > 0.0; };
   require(finite_positive(p.agrid),
           "agrid must be a finite number > 0, got " + format_number(p.agrid));
@@ -77,17 +79,17 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
     require(rounded <= 1e8, "agrid " + format_number(p.agrid) + " gives " + format_number(rounded) +
                                 " lattice nodes on axis " + std::to_string(d) +
                                 "; a lattice that fine cannot be stored");
-    m_n[d] = static_cast<int>(rounded);
-    m_pad[d] = m_n[d] + 2;
+    m_global[d] = static_cast<int>(rounded);
   }
   {
     // 19 populations + flags per padded node: refused (instead of an
     // allocation whose size wrapped around) when it exceeds 2^50 bytes
-    const double padded = double(m_pad[0]) * m_pad[1] * m_pad[2];
+    const double padded = double(m_global[0] + 2) * (m_global[1] + 2) * (m_global[2] + 2);
     require(padded * (Q * sizeof(double) + 2) < std::ldexp(1.0, 50),
-            "the lattice of " + format_number(double(m_n[0]) * m_n[1] * m_n[2]) +
+            "the lattice of " + format_number(double(m_global[0]) * m_global[1] * m_global[2]) +
                 " nodes (box / agrid) needs more than 2^50 bytes; use a larger agrid");
   }
+  m_grid = DomainGrid(comm, m_global, node_grid);
 
   // Relaxation (Duenweg, Schiller & Ladd 2007, eqs. 40-41, in lattice units):
   // nu = (1/omega_s - 1/2) / 3, nu_bulk = 2 (1/omega_b - 1/2) / 9.
@@ -172,23 +174,137 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box) : m_p(p), m_box(box.
     m_noise_factor[m] = 3.0 * m_kT_lattice * (1.0 - lambda * lambda) / dot(m, m);
   }
 
+  set_n_threads(p.n_threads);
+  allocate_subdomain();
+  rebuild_geometry();
+}
+
+void LBFluid::allocate_subdomain() {
+  m_origin = m_grid.lower();
+  m_n = m_grid.extent();
+  m_pad = m_n + Vec3i::Constant(2);
   for (int q = 0; q < Q; ++q)
     m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][2]) * m_pad[1] + c[q][1]) * m_pad[0] + c[q][0];
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
   m_stride = ((nodes + 7) / 8) * 8;
+  std::free(m_f);
   m_f = allocate(Q * m_stride);
   for (int q = 0; q < Q; ++q) {
     m_read_normal[q] = static_cast<std::ptrdiff_t>(q * m_stride);
     m_read_swapped[q] = static_cast<std::ptrdiff_t>(opposite(q) * m_stride) - m_offset[q];
   }
+  m_swapped = false;
   m_flag.assign(nodes, 0);
-  set_n_threads(p.n_threads);
+  m_field.clear();
+  m_field_valid.clear();
+  m_field_used = false;
+  m_ledger = CouplingLedger{};
   for (int x = 1; x <= m_n[0]; ++x)
     for (int y = 1; y <= m_n[1]; ++y)
       for (int z = 1; z <= m_n[2]; ++z)
         for (int q = 0; q < Q; ++q)
-          m_f[q * m_stride + index(x, y, z)] = w[q] * p.density;
-  rebuild_geometry();
+          m_f[q * m_stride + index(x, y, z)] = w[q] * m_p.density;
+}
+
+std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& boundaries) const {
+  // every padded node, ghosts included, from the shapes at its global
+  // position (wrapped periodically): the ghosts' flags are those the
+  // neighbouring rank gives its nodes, with no communication
+  std::vector<std::uint16_t> flag(static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2], 0);
+  if (boundaries.empty())
+    return flag;
+  for (int z = 0; z < m_pad[2]; ++z)
+    for (int y = 0; y < m_pad[1]; ++y)
+      for (int x = 0; x < m_pad[0]; ++x) {
+        Vec3i g = m_origin + Vec3i(x - 1, y - 1, z - 1);
+        for (int d = 0; d < 3; ++d)
+          g[d] = ((g[d] % m_global[d]) + m_global[d]) % m_global[d];
+        const Vec3 pos = (g.cast<double>() + Vec3::Constant(0.5)) * m_p.agrid;
+        std::uint16_t& f = flag[index(x, y, z)];
+        for (std::size_t b = 0; b < boundaries.size() && f == 0; ++b)
+          if (boundaries[b].shape->is_inside(pos))
+            f = static_cast<std::uint16_t>(b + 1);
+      }
+  return flag;
+}
+
+void LBFluid::repartition(const DomainGrid& old_grid) {
+  // Every rank sends the nodes of its old subdomain that lie in another
+  // rank's new one (all 19 populations, normal layout, x fastest over the
+  // overlap box); the boxes are known to all, so are the counts.
+  normalize_layout();
+  const int size = m_grid.size();
+  auto overlap = [](const Vec3i& lo_a, const Vec3i& n_a, const Vec3i& lo_b, const Vec3i& n_b,
+                    Vec3i& lo, Vec3i& n) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(lo_a[d], lo_b[d]);
+      n[d] = std::max(0, std::min(lo_a[d] + n_a[d], lo_b[d] + n_b[d]) - lo[d]);
+    }
+    return n.prod();
+  };
+  const Vec3i old_lo = old_grid.lower(), old_n = old_grid.extent();
+  const Vec3i old_pad = old_n + Vec3i::Constant(2);
+  auto old_index = [&](const Vec3i& g) {
+    const Vec3i l = g - old_lo + Vec3i::Ones();
+    return (static_cast<std::size_t>(l[2]) * old_pad[1] + l[1]) * old_pad[0] + l[0];
+  };
+  std::vector<int> send_counts(size), recv_counts(size), send_displs(size), recv_displs(size);
+  std::vector<double> send;
+  for (int r = 0; r < size; ++r) {
+    const Vec3i c = m_grid.coords_of(r);
+    Vec3i lo, n;
+    send_displs[r] = static_cast<int>(send.size());
+    if (overlap(old_lo, old_n, m_grid.lower(c), m_grid.extent(c), lo, n) > 0)
+      for (int z = lo[2]; z < lo[2] + n[2]; ++z)
+        for (int y = lo[1]; y < lo[1] + n[1]; ++y)
+          for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
+            const std::size_t i = old_index(Vec3i(x, y, z));
+            for (int q = 0; q < Q; ++q)
+              send.push_back(m_f[q * m_stride + i]);
+          }
+    send_counts[r] = static_cast<int>(send.size()) - send_displs[r];
+  }
+  const Vec3i new_lo = m_grid.lower(), new_n = m_grid.extent();
+  int total = 0;
+  for (int r = 0; r < size; ++r) {
+    const Vec3i c = old_grid.coords_of(r);
+    Vec3i lo, n;
+    recv_displs[r] = total;
+    recv_counts[r] = Q * overlap(old_grid.lower(c), old_grid.extent(c), new_lo, new_n, lo, n);
+    total += recv_counts[r];
+  }
+  std::vector<double> recv(static_cast<std::size_t>(total));
+  MPI_Alltoallv(send.data(), send_counts.data(), send_displs.data(), MPI_DOUBLE, recv.data(),
+                recv_counts.data(), recv_displs.data(), MPI_DOUBLE, m_grid.comm());
+  allocate_subdomain();
+  std::size_t k = 0;
+  for (int r = 0; r < size; ++r) {
+    const Vec3i c = old_grid.coords_of(r);
+    Vec3i lo, n;
+    if (overlap(old_grid.lower(c), old_grid.extent(c), new_lo, new_n, lo, n) == 0)
+      continue;
+    for (int z = lo[2]; z < lo[2] + n[2]; ++z)
+      for (int y = lo[1]; y < lo[1] + n[1]; ++y)
+        for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
+          const std::size_t i = domain_index(Vec3i(x, y, z));
+          for (int q = 0; q < Q; ++q)
+            m_f[q * m_stride + i] = recv[k++];
+        }
+  }
+}
+
+std::size_t LBFluid::domain_index(const Vec3i& g) const {
+  int l[3];
+  for (int d = 0; d < 3; ++d)
+    l[d] = ((g[d] - m_origin[d]) % m_global[d] + m_global[d]) % m_global[d] + 1;
+  return index(l[0], l[1], l[2]);
+}
+
+std::size_t LBFluid::owned_index(const Vec3i& node) const {
+  for (int d = 0; d < 3; ++d)
+    if (node[d] < m_origin[d] || node[d] >= m_origin[d] + m_n[d])
+      return npos;
+  return index(node[0] - m_origin[0] + 1, node[1] - m_origin[1] + 1, node[2] - m_origin[2] + 1);
 }
 
 LBFluid::~LBFluid() {
@@ -243,9 +359,9 @@ void LBFluid::validate(const BoxGeometry& box, double time_step) const {
     require(std::abs(cells - std::round(cells)) <= 1e-9 * std::max(1.0, cells) && cells >= 0.5,
             "agrid " + format_number(m_p.agrid) + " does not divide the box length " +
                 format_number(box.length()[d]) + " on axis " + std::to_string(d));
-    require(static_cast<int>(std::round(cells)) == m_n[d],
+    require(static_cast<int>(std::round(cells)) == m_global[d],
             "box_l changed after the fluid was created (axis " + std::to_string(d) + ": " +
-                std::to_string(m_n[d]) + " nodes); remove and re-add the fluid");
+                std::to_string(m_global[d]) + " nodes); remove and re-add the fluid");
   }
   require(std::isfinite(time_step) && time_step > 0.0,
           "time_step must be > 0, got " + format_number(time_step));
@@ -262,27 +378,48 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
     require(b.velocity.allFinite(), "LBBoundary: velocity must be finite");
   }
   normalize_layout();
-  const std::vector<std::uint16_t> old_flag = m_flag;
-  std::vector<BoundarySpec> old_boundaries = std::move(m_boundaries);
-  m_boundaries = boundaries;
-  std::fill(m_flag.begin(), m_flag.end(), 0);
-  bool any_fluid = false;
-  for (int x = 1; x <= m_n[0]; ++x)
+  std::vector<std::uint16_t> flag = flags_for(boundaries);
+  long any_fluid = 0;
+  for (int z = 1; z <= m_n[2]; ++z)
     for (int y = 1; y <= m_n[1]; ++y)
-      for (int z = 1; z <= m_n[2]; ++z) {
-        const Vec3 pos = (Vec3(x, y, z) - Vec3::Constant(0.5)) * m_p.agrid;
-        std::uint16_t& flag = m_flag[index(x, y, z)];
-        for (std::size_t b = 0; b < boundaries.size() && flag == 0; ++b)
-          if (boundaries[b].shape->is_inside(pos))
-            flag = static_cast<std::uint16_t>(b + 1);
-        any_fluid |= flag == 0;
-      }
-  // no fluid left: refused (the flags back as they were, nothing else changed)
-  if (!any_fluid && !boundaries.empty()) {
-    m_flag = old_flag;
-    m_boundaries = std::move(old_boundaries);
+      for (int x = 1; x <= m_n[0]; ++x)
+        any_fluid |= flag[index(x, y, z)] == 0;
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, &any_fluid, 1, MPI_LONG, MPI_MAX, m_grid.comm());
+  // no fluid left: refused (nothing changed)
+  if (!any_fluid && !boundaries.empty())
     throw InputError("LBBoundary: the boundaries cover every lattice node, no fluid is left");
+  // Load balance: while no particle has coupled yet (the coupling's records
+  // hold this rank's node indices), the cuts move so that every rank holds
+  // about as many fluid nodes (the solid ones cost nothing in the update).
+  if (m_balance && m_grid.size() > 1 && !m_ledger.any) {
+    std::array<std::vector<double>, 3> planes;
+    for (int d = 0; d < 3; ++d)
+      planes[d].assign(m_global[d], 0.0);
+    for (int z = 1; z <= m_n[2]; ++z)
+      for (int y = 1; y <= m_n[1]; ++y)
+        for (int x = 1; x <= m_n[0]; ++x)
+          if (flag[index(x, y, z)] == 0) {
+            planes[0][m_origin[0] + x - 1] += 1.0;
+            planes[1][m_origin[1] + y - 1] += 1.0;
+            planes[2][m_origin[2] + z - 1] += 1.0;
+          }
+    for (auto& v : planes)
+      MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_SUM,
+                    m_grid.comm());
+    DomainGrid balanced = m_grid;
+    if (balanced.balance(planes)) {
+      const DomainGrid old = m_grid;
+      m_grid = balanced;
+      repartition(old);
+      // the old boundaries' flags on the new subdomain
+      m_flag = flags_for(m_boundaries);
+      flag = flags_for(boundaries);
+    }
   }
+  const std::vector<std::uint16_t> old_flag = std::move(m_flag);
+  m_flag = std::move(flag);
+  m_boundaries = boundaries;
   // nodes that became fluid start at rest at the reference density
   for (int x = 1; x <= m_n[0]; ++x)
     for (int y = 1; y <= m_n[1]; ++y)
@@ -307,17 +444,6 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
 
 void LBFluid::rebuild_geometry() {
   ++m_state_version;
-  // ghost flags: periodic images of the domain's
-  for (int x = 0; x < m_pad[0]; ++x)
-    for (int y = 0; y < m_pad[1]; ++y)
-      for (int z = 0; z < m_pad[2]; ++z) {
-        const bool ghost = x == 0 || y == 0 || z == 0 || x == m_pad[0] - 1 || y == m_pad[1] - 1 ||
-                           z == m_pad[2] - 1;
-        if (ghost) {
-          auto wrap = [](int v, int n) { return v == 0 ? n : (v == n + 1 ? 1 : v); };
-          m_flag[index(x, y, z)] = m_flag[index(wrap(x, m_n[0]), wrap(y, m_n[1]), wrap(z, m_n[2]))];
-        }
-      }
   m_runs.clear();
   m_links.clear();
   m_n_fluid = 0;
@@ -353,6 +479,11 @@ void LBFluid::rebuild_geometry() {
   for (const Link& l : m_links)
     links.push_back({l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, 1, l.wall_term});
   m_bounce_back = merge_runs(std::move(links));
+  long counts[2] = {static_cast<long>(m_n_fluid), static_cast<long>(m_links.size())};
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_LONG, MPI_SUM, m_grid.comm());
+  m_n_fluid_global = static_cast<std::size_t>(counts[0]);
+  m_n_links_global = static_cast<std::size_t>(counts[1]);
   build_halo_pairs();
 }
 
@@ -389,15 +520,137 @@ Vec3 LBFluid::boundary_force(int b) const {
     for (int d = 0; d < 3; ++d)
       sum[d] += c[l.q][d] * transfer;
   }
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, sum.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
   return sum * std::pow(m_p.agrid, 4) / (m_p.tau * m_p.tau);
 }
 
 std::size_t LBFluid::checked_node(const Vec3i& node) const {
   for (int d = 0; d < 3; ++d)
-    if (node[d] < 0 || node[d] >= m_n[d])
+    if (node[d] < 0 || node[d] >= m_global[d])
       throw InputError("lattice node index " + std::to_string(node[d]) + " on axis " +
-                       std::to_string(d) + " out of range [0, " + std::to_string(m_n[d]) + ")");
-  return index(node[0] + 1, node[1] + 1, node[2] + 1);
+                       std::to_string(d) + " out of range [0, " + std::to_string(m_global[d]) +
+                       ")");
+  const std::size_t n = owned_index(node);
+  if (n == npos)
+    throw InputError("lattice node (" + std::to_string(node[0]) + ", " + std::to_string(node[1]) +
+                     ", " + std::to_string(node[2]) + ") is not on MPI rank " +
+                     std::to_string(m_grid.rank()) + " (use the collective block access)");
+  return n;
+}
+
+namespace {
+int block_components(const std::string& prop) {
+  if (prop == "velocity")
+    return 3;
+  if (prop == "density" || prop == "boundary")
+    return 1;
+  if (prop == "population")
+    return Q;
+  if (prop == "pressure_tensor")
+    return 9;
+  throw InputError("unknown lattice node property '" + prop + "'");
+}
+} // namespace
+
+std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
+                                       const Vec3i& hi) const {
+  const int nc = block_components(prop);
+  for (int d = 0; d < 3; ++d)
+    if (lo[d] < 0 || hi[d] > m_global[d] || lo[d] >= hi[d])
+      throw InputError("lattice node block [" + std::to_string(lo[d]) + ", " +
+                       std::to_string(hi[d]) + ") on axis " + std::to_string(d) +
+                       " is empty or outside [0, " + std::to_string(m_global[d]) + ")");
+  const Vec3i n = hi - lo;
+  // each rank fills the nodes it owns, zeros elsewhere; the sum over the
+  // ranks is then every value exactly (x + 0 = x)
+  std::vector<double> out(static_cast<std::size_t>(n.prod()) * nc, 0.0);
+  double* o = out.data();
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k, o += nc) {
+        const Vec3i node(i, j, k);
+        if (!owns(node))
+          continue;
+        if (prop == "velocity") {
+          const Vec3 u = node_velocity(node);
+          o[0] = u[0], o[1] = u[1], o[2] = u[2];
+        } else if (prop == "density") {
+          o[0] = node_density(node);
+        } else if (prop == "boundary") {
+          o[0] = node_boundary(node) + 1;
+        } else if (prop == "population") {
+          const auto f = node_populations(node);
+          std::copy(f.begin(), f.end(), o);
+        } else {
+          const Mat3 pt = node_pressure_tensor(node);
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              o[3 * a + b] = pt(a, b);
+        }
+      }
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, out.data(), static_cast<int>(out.size()), MPI_DOUBLE, MPI_SUM,
+                  m_grid.comm());
+  return out;
+}
+
+void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                        const std::vector<double>& values) {
+  const int nc = block_components(prop);
+  if (prop != "velocity" && prop != "density" && prop != "population")
+    throw InputError(prop + " is read-only");
+  for (int d = 0; d < 3; ++d)
+    if (lo[d] < 0 || hi[d] > m_global[d] || lo[d] >= hi[d])
+      throw InputError("lattice node block [" + std::to_string(lo[d]) + ", " +
+                       std::to_string(hi[d]) + ") on axis " + std::to_string(d) +
+                       " is empty or outside [0, " + std::to_string(m_global[d]) + ")");
+  const Vec3i n = hi - lo;
+  if (values.size() != static_cast<std::size_t>(n.prod()) * nc)
+    throw InputError(prop + ": expected " + std::to_string(nc) + " value(s) per node for " +
+                     std::to_string(n.prod()) + " node(s), got " + std::to_string(values.size()));
+  // the value checks first, on every rank alike (the same values): a refused
+  // block changes nothing anywhere
+  for (std::size_t v = 0; v < values.size(); ++v) {
+    require(std::isfinite(values[v]), prop + ": values must be finite");
+    if (prop == "density")
+      require(values[v] > 0.0, "density must be a finite number > 0");
+  }
+  if (n.prod() == 1) {
+    // a single boundary node is an error on every rank (its owner knows it)
+    const std::size_t own = owned_index(lo);
+    double solid = own != npos && m_flag[own] != 0 ? 1.0 : 0.0;
+    if (m_grid.size() > 1)
+      MPI_Allreduce(MPI_IN_PLACE, &solid, 1, MPI_DOUBLE, MPI_MAX, m_grid.comm());
+    require(solid == 0.0, prop == "population"
+                              ? "cannot set the populations of a boundary node"
+                              : "cannot set the density or velocity of a boundary node");
+  }
+  ++m_state_version;
+  const double* v = values.data();
+  for (int i = lo[0]; i < hi[0]; ++i)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int k = lo[2]; k < hi[2]; ++k, v += nc) {
+        const Vec3i node(i, j, k);
+        const std::size_t own = owned_index(node);
+        // a block spanning boundary nodes sets the fluid nodes only
+        if (own == npos || m_flag[own] != 0)
+          continue;
+        // written here, not through set_node_*: those count a change on
+        // the owner only, and the fluid's state_version must stay the same
+        // on every rank (it decides collective recomputations)
+        if (prop == "population") {
+          for (int q = 0; q < Q; ++q)
+            m_f[population_slot(q, own)] = v[q];
+          continue;
+        }
+        const double rho = prop == "density" ? v[0] : node_density(node);
+        const Vec3 u = prop == "velocity" ? Vec3(v[0], v[1], v[2]) : node_velocity(node);
+        // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
+        const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
+        for (int q = 0; q < Q; ++q)
+          m_f[population_slot(q, own)] = equilibrium(q, rho, u_lattice);
+      }
 }
 
 int LBFluid::node_boundary(const Vec3i& node) const {
@@ -492,7 +745,7 @@ void LBFluid::compute_coupling_velocities() {
       for (int q = 0; q < Q; ++q)
         __builtin_prefetch(f + off[q], 0, 1);
     }
-    out[entry[nodes[i]]] = {velocity_at_index(nodes[i]), Vec3::Zero()};
+    out[entry[nodes[i]]] = {coupling_velocity(nodes[i]), Vec3::Zero()};
   }
 }
 
@@ -504,6 +757,8 @@ double LBFluid::total_mass() const {
       for (int i = 0; i < r.length; ++i)
         mass += f[i];
     }
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, &mass, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());
   return mass * std::pow(m_p.agrid, 3);
 }
 
@@ -524,31 +779,64 @@ Vec3 LBFluid::total_momentum() const {
           for (int d = 0; d < 3; ++d)
             j[d] += m_field[3 * (r.start + i) + d];
   }
+  if (m_grid.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, j.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
+  // in_flight is the whole coupling's (every rank knows all its impulses)
   return j * std::pow(m_p.agrid, 4) / m_p.tau - m_ledger.in_flight;
 }
 
+namespace {
+/** Rank 0 runs write(); its error, if any, is raised on every rank. */
+template <class Write> void write_on_root(MPI_Comm comm, int size, int rank, Write&& write) {
+  std::string error;
+  if (rank == 0) {
+    try {
+      write();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  if (size > 1) {
+    int length = static_cast<int>(error.size());
+    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+    error.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(error.data(), length, MPI_CHAR, 0, comm);
+  }
+  if (!error.empty())
+    throw InputError(error);
+}
+} // namespace
+
 void LBFluid::write_vtk_velocity(const std::string& path) const {
-  std::vector<double> data;
-  data.reserve(3 * static_cast<std::size_t>(m_n.prod()));
-  for (int k = 0; k < m_n[2]; ++k)
-    for (int j = 0; j < m_n[1]; ++j)
-      for (int i = 0; i < m_n[0]; ++i) {
-        const Vec3 u = velocity_at_index(index(i + 1, j + 1, k + 1));
-        data.insert(data.end(), {u[0], u[1], u[2]});
-      }
-  io::write_vtk_structured_points(path, m_n, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid, "velocity",
-                                  3, data);
+  // (x, y, z) blocks come z fastest; VTK wants x fastest
+  const std::vector<double> block = get_block("velocity", Vec3i::Zero(), m_global);
+  write_on_root(m_grid.comm(), m_grid.size(), m_grid.rank(), [&] {
+    std::vector<double> data;
+    data.reserve(block.size());
+    for (int k = 0; k < m_global[2]; ++k)
+      for (int j = 0; j < m_global[1]; ++j)
+        for (int i = 0; i < m_global[0]; ++i) {
+          const double* u = block.data() +
+                            3 * ((static_cast<std::size_t>(i) * m_global[1] + j) * m_global[2] + k);
+          data.insert(data.end(), {u[0], u[1], u[2]});
+        }
+    io::write_vtk_structured_points(path, m_global, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid,
+                                    "velocity", 3, data);
+  });
 }
 
 void LBFluid::write_vtk_boundary(const std::string& path) const {
-  std::vector<double> data;
-  data.reserve(static_cast<std::size_t>(m_n.prod()));
-  for (int k = 0; k < m_n[2]; ++k)
-    for (int j = 0; j < m_n[1]; ++j)
-      for (int i = 0; i < m_n[0]; ++i)
-        data.push_back(m_flag[index(i + 1, j + 1, k + 1)]);
-  io::write_vtk_structured_points(path, m_n, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid, "boundary",
-                                  1, data);
+  const std::vector<double> block = get_block("boundary", Vec3i::Zero(), m_global);
+  write_on_root(m_grid.comm(), m_grid.size(), m_grid.rank(), [&] {
+    std::vector<double> data;
+    data.reserve(block.size());
+    for (int k = 0; k < m_global[2]; ++k)
+      for (int j = 0; j < m_global[1]; ++j)
+        for (int i = 0; i < m_global[0]; ++i)
+          data.push_back(block[(static_cast<std::size_t>(i) * m_global[1] + j) * m_global[2] + k]);
+    io::write_vtk_structured_points(path, m_global, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid,
+                                    "boundary", 1, data);
+  });
 }
 
 } // namespace pyoif::lb

@@ -21,14 +21,25 @@
 // (the odd update reads it); after an odd update what was pushed into the
 // ghost layer is folded back into the domain. Halfway bounce-back on the
 // precomputed fluid-solid links (Ladd 1994, moving walls by the momentum
-// term) follows either halo step. The ghost exchange is where an MPI
-// exchange would go.
+// term) follows either halo step.
+//
+// Domain decomposition (MPI): the lattice is split into a Cartesian grid of
+// subdomains (DomainGrid), one per rank; each rank stores its subdomain with
+// the ghost layer around it, flags its own nodes and ghosts from the shapes,
+// and the halo steps above exchange exactly the populations that cross a
+// subdomain face, edge or corner: with the neighbouring rank in one message
+// per neighbour (packed in an order both sides derive from the shared
+// cuts), or as the copies above where the neighbour is the rank itself. The
+// update is node-local and the exchange copies values, so a decomposed run
+// is bit for bit the serial one. Node (i, j, k) below is always the global
+// lattice node; padded indices are this rank's.
 //
 // Units: populations are mass densities (the unit of `dens`); velocities in
 // the kernel are lattice velocities u * tau / agrid, force densities are
 // momentum-density changes per update in those units, F * tau^2 / agrid.
 #pragma once
 
+#include "communication/domain_grid.hpp"
 #include "lb/lb_lattice.hpp"
 #include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
@@ -40,6 +51,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -79,8 +91,12 @@ using Mat3 = Eigen::Matrix3d;
 
 class LBFluid {
 public:
-  /** Throws InputError for a bad parameter or a box not divisible by agrid. */
-  LBFluid(const LBParams& params, const BoxGeometry& box);
+  /** Throws InputError for a bad parameter or a box not divisible by agrid.
+   *  The lattice is split over the ranks of comm (collective): node_grid
+   *  ranks per axis (all zero: chosen by DomainGrid), cuts moved to balance
+   *  the fluid nodes when boundaries are first set if balance_fluid. */
+  LBFluid(const LBParams& params, const BoxGeometry& box, MPI_Comm comm = MPI_COMM_SELF,
+          const Vec3i& node_grid = Vec3i::Zero(), bool balance_fluid = true);
   ~LBFluid();
   LBFluid(const LBFluid&) = delete;
   LBFluid& operator=(const LBFluid&) = delete;
@@ -89,7 +105,13 @@ public:
   double tau() const { return m_p.tau; }
   const LBParams& params() const { return m_p; }
   const Relaxation& relaxation() const { return m_relax; }
-  const Vec3i& grid() const { return m_n; }
+  /** The global lattice (nodes per axis). */
+  const Vec3i& grid() const { return m_global; }
+  /** This rank's subdomain: first global node and extent. */
+  const Vec3i& local_origin() const { return m_origin; }
+  const Vec3i& local_grid() const { return m_n; }
+  const DomainGrid& domain() const { return m_grid; }
+  bool distributed() const { return m_grid.size() > 1; }
   std::uint64_t n_updates() const { return m_updates; }
   /** Changes whenever the populations, the boundaries or ext_force_density
    *  change (every update, every setter): System recomputes the coupling
@@ -125,10 +147,31 @@ public:
   void set_boundaries(const std::vector<BoundarySpec>& boundaries);
   /** Force of the fluid on boundary b in the last update (momentum exchange). */
   Vec3 boundary_force(int b) const;
-  std::size_t n_fluid_nodes() const { return m_n_fluid; }
-  std::size_t n_links() const { return m_links.size(); }
+  /** Over all ranks. */
+  std::size_t n_fluid_nodes() const { return m_n_fluid_global; }
+  std::size_t n_links() const { return m_n_links_global; }
+  /** Bytes this rank sends to other ranks in one population halo exchange. */
+  std::size_t halo_bytes() const;
+  /** Seconds spent in this rank's halo exchanges (waiting included). */
+  double halo_seconds() const { return m_halo_seconds; }
 
   // --- node access: (i, j, k) in [0, N) ----------------------------------------
+  // Node accessors give the node's values on the rank that owns it (check
+  // owns()); setters write on the owner and are no-ops elsewhere, after the
+  // same checks on every rank. get_block/set_block/gather_* are collective.
+  /** Padded index of global node (i, j, k) when this rank owns it, else npos. */
+  std::size_t owned_index(const Vec3i& node) const;
+  bool owns(const Vec3i& node) const { return owned_index(node) != npos; }
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  /** Collective: property values of the block lo <= node < hi, (x, y, z,
+   *  component) order with z fastest, the same on every rank. prop:
+   *  velocity, density, boundary, population, pressure_tensor. */
+  std::vector<double> get_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi) const;
+  /** Collective: sets velocity, density or population on the block; a block
+   *  of several nodes skips boundary nodes, a single boundary node is an
+   *  error on every rank. */
+  void set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                 const std::vector<double>& values);
   /** -1 for a fluid node, else the index of the boundary. */
   int node_boundary(const Vec3i& node) const;
   double node_density(const Vec3i& node) const;
@@ -141,8 +184,24 @@ public:
   void set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u);
 
   // --- particle coupling (lattice indices are padded node indices) -----------
-  /** Padded index of a node already in [0, N) on every axis (no folding). */
+  /** Padded index of a node given by local coordinates in [-1, n] (no folding). */
   std::size_t padded_index_in_box(int i, int j, int k) const { return index(i + 1, j + 1, k + 1); }
+  /** Whether padded index n is a node of this rank's subdomain (not a ghost). */
+  bool is_domain_node(std::size_t n) const {
+    const Vec3i pc = padded_coordinates(n);
+    return (pc.array() >= 1).all() && (pc.array() <= m_n.array()).all();
+  }
+  /** Collective: refreshes the velocities of the ghost-layer nodes from the
+   *  ranks that own them, when the fluid changed since the last time (the
+   *  coupling's stencils reach one node into the ghost layer). */
+  void refresh_ghost_velocities();
+  /** Velocity (MD units) at padded index n, ghost nodes of a decomposed
+   *  lattice included (from refresh_ghost_velocities). */
+  Vec3 coupling_velocity(std::size_t n) const {
+    if (!m_flag[n] && m_grid.size() > 1 && !is_domain_node(n))
+      return m_ghost_velocity[m_ghost_slot.at(n)];
+    return velocity_at_index(n);
+  }
   /** Difference of the padded indices of neighbours along axis d. */
   std::ptrdiff_t padded_axis_stride(int d) const {
     return d == 0 ? 1 : d == 1 ? m_pad[0] : static_cast<std::ptrdiff_t>(m_pad[0]) * m_pad[1];
@@ -241,7 +300,11 @@ public:
     std::vector<NodeCoupling> node_coupling;
     std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
     std::vector<Stencil> stencils;                       ///< per particle of the current pass
-    std::vector<std::uint32_t> stencil_entries;          ///< compact entries, 8 per particle
+    /// per particle: this rank owns the stencil's first node and gives the
+    /// particle its force (decomposed lattice; always on one rank)
+    std::vector<std::uint8_t> gives_force;
+    std::vector<Vec3> coupling_force;           ///< per particle, this pass (summed over ranks)
+    std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
   /** The coupling stencils' steps (CouplingLedger::StencilSteps). */
@@ -249,7 +312,7 @@ public:
     CouplingLedger::StencilSteps st;
     for (int d = 0; d < 3; ++d) {
       st.plain[d] = padded_axis_stride(d);
-      st.wrapped[d] = padded_axis_stride(d) * (1 - m_n[d]);
+      st.wrapped[d] = padded_axis_stride(d) * (1 - m_n[d]); // undecomposed axes only
     }
     return st;
   }
@@ -259,6 +322,7 @@ public:
   void compute_coupling_velocities();
 
   // --- output -----------------------------------------------------------------
+  /** Collective: rank 0 writes; an error there is raised on every rank. */
   void write_vtk_velocity(const std::string& path) const;
   void write_vtk_boundary(const std::string& path) const;
 
@@ -284,9 +348,28 @@ private:
     return Vec3i(static_cast<int>(n % px), static_cast<int>((n / px) % py),
                  static_cast<int>(n / (px * py)));
   }
+  /** Throws InputError for a node outside [0, N); returns owned_index(node). */
   std::size_t checked_node(const Vec3i& node) const;
+  /** Flags of this rank's padded nodes (ghosts too) for these boundaries. */
+  std::vector<std::uint16_t> flags_for(const std::vector<BoundarySpec>& boundaries) const;
+  /** Allocates the populations (rest state at dens) and flags for the grid's subdomain. */
+  void allocate_subdomain();
+  /** Moves the populations to the grid's new cuts (collective). */
+  void repartition(const DomainGrid& old_grid);
   void rebuild_geometry();
   void build_halo_pairs();
+  /** Nodes of the ghost region o of the subdomain (lower, extent), in the
+   *  order both neighbours list them: (global node, q) for every q moving
+   *  into the region when with_q (the population halo: fluid pairs only),
+   *  else every node once with q = 0. */
+  template <class Visit>
+  void visit_region(const Vec3i& lower, const Vec3i& extent, const Vec3i& o, bool with_q,
+                    Visit&& visit) const;
+  /** This rank's padded index of global node g that lies in its subdomain. */
+  std::size_t domain_index(const Vec3i& g) const;
+  /** Sends/receives the remote part of a halo step (fill_ghosts: faces to
+   *  the neighbours' ghosts, else ghosts folded into the neighbours' faces). */
+  void exchange_remote(double* f, bool fill_ghosts) const;
   void apply_bounce_back(double* f) const;
   /** Where an update found a node out of the model's range. */
   struct BadNode {
@@ -318,7 +401,10 @@ private:
   LBParams m_p;
   Relaxation m_relax{};
   Vec3 m_box;
-  Vec3i m_n, m_pad;
+  DomainGrid m_grid;
+  bool m_balance = true;
+  Vec3i m_global, m_origin; ///< global lattice, this rank's first node
+  Vec3i m_n, m_pad;         ///< this rank's extent, + 2 ghost layers
   std::size_t m_stride = 0;
   double* m_f = nullptr;  ///< populations, 19 * stride, updated in place
   bool m_swapped = false; ///< after an odd number of updates (see top)
@@ -368,7 +454,22 @@ private:
   /// first = ghost-layer place (population included), second = its
   /// periodic image, for the halo exchange; fluid ones only
   std::vector<PlaceRun> m_halo;
-  std::size_t m_n_fluid = 0;
+  std::size_t m_n_fluid = 0, m_n_fluid_global = 0, m_n_links_global = 0;
+  /// The halo with one neighbouring rank: population places (q * stride +
+  /// node) of this rank's ghosts that the neighbour's faces fill (and that
+  /// are folded back into them), and of this rank's faces that fill the
+  /// neighbour's ghosts, each in the order both sides list them.
+  struct HaloPeer {
+    int rank;
+    std::vector<std::size_t> ghost, face;
+    std::vector<std::size_t> velocity_ghost, velocity_face; ///< nodes (coupling)
+    mutable std::vector<double> send, recv;
+  };
+  std::vector<HaloPeer> m_peers;
+  std::vector<Vec3> m_ghost_velocity;
+  std::unordered_map<std::size_t, std::size_t> m_ghost_slot; ///< padded ghost -> m_ghost_velocity
+  std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
+  mutable double m_halo_seconds = 0.0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
   std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};
   Vec3 m_ext_lattice = Vec3::Zero();

@@ -23,6 +23,7 @@
 #include "utils/random.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <sstream>
@@ -297,10 +298,12 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
       // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
       // the w-weighted basis; mass and momentum untouched
-      const Vec3i pc = padded_coordinates(n);
-      const int x = pc[0] - 1, y = pc[1] - 1, z = pc[2] - 1;
+      // keyed by the global node: the same noise on any decomposition
+      const Vec3i node_g = padded_coordinates(n) - Vec3i::Ones() + m_origin;
       const random::Key key{m_p.seed, static_cast<std::uint64_t>(random::Stream::lb_fluid), counter,
-                            (static_cast<std::uint64_t>(x) * m_n[1] + y) * m_n[2] + z};
+                            (static_cast<std::uint64_t>(node_g[0]) * m_global[1] + node_g[1]) *
+                                    m_global[2] +
+                                node_g[2]};
       double amp[Q];
       for (int m = 4; m < Q; ++m)
         amp[m] = std::sqrt(res.rho * m_noise_factor[m]) * random::normal(key, m);
@@ -317,62 +320,195 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   return false;
 }
 
+template <class Visit>
+void LBFluid::visit_region(const Vec3i& lower, const Vec3i& extent, const Vec3i& o, bool with_q,
+                           Visit&& visit) const {
+  // Region o of the ghost layer of the subdomain (lower, extent), in its
+  // padded coordinates: the single ghost plane where o_d != 0, the domain's
+  // range where o_d = 0. With q: the populations whose velocity points into
+  // the region (c_d = o_d wherever o_d != 0), at the ghosts g that a domain
+  // node g - c_q reaches (along an axis the region spans, only ghosts whose
+  // node g - c_q lies in the domain take part; the others belong to a
+  // neighbouring edge or corner region). Listed z, y, x outermost to
+  // innermost, q innermost: both ranks of a pair walk it alike.
+  int lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    if (o[d] == 0) {
+      lo[d] = 1;
+      hi[d] = extent[d];
+    } else {
+      lo[d] = hi[d] = o[d] < 0 ? 0 : extent[d] + 1;
+    }
+  }
+  for (int q = with_q ? 1 : 0; q < (with_q ? Q : 1); ++q) {
+    if (with_q) {
+      bool moves_in = true;
+      for (int d = 0; d < 3; ++d)
+        if (o[d] != 0 && c[q][d] != o[d])
+          moves_in = false;
+      if (!moves_in)
+        continue;
+    }
+    int qlo[3], qhi[3];
+    for (int d = 0; d < 3; ++d) {
+      const int cq = with_q ? c[q][d] : 0;
+      qlo[d] = o[d] == 0 ? std::max(lo[d], 1 + cq) : lo[d];
+      qhi[d] = o[d] == 0 ? std::min(hi[d], extent[d] + cq) : hi[d];
+    }
+    for (int z = qlo[2]; z <= qhi[2]; ++z)
+      for (int y = qlo[1]; y <= qhi[1]; ++y)
+        for (int x = qlo[0]; x <= qhi[0]; ++x)
+          visit(Vec3i(lower[0] + x - 1, lower[1] + y - 1, lower[2] + z - 1), q);
+  }
+}
+
 void LBFluid::build_halo_pairs() {
-  // Region o of the ghost layer (26 of them) holds the populations whose
-  // velocity points into it (c_d = o_d wherever o_d != 0), at the ghosts g
-  // that a domain node n = g - c_q reaches. After an odd update they are what
-  // n pushed out, to be folded into the periodic image g'; after an even
-  // update the odd update will read them at g, so they are filled from g'.
-  // Only pairs where n and g are fluid are kept: a solid n pushes nothing
-  // and reads nothing, and a solid g is served by the bounce-back links. So
-  // channel walls cost no halo traffic at all.
+  // After an odd update the region o of the ghost layer holds what the
+  // domain pushed out, to be folded into the neighbour's face; after an even
+  // update the odd update will read it there, so it is filled from the
+  // neighbour's face. Only pairs where the ghost g and the node g - c_q
+  // are fluid are kept: a solid node pushes nothing and reads nothing, and
+  // a solid ghost is served by the bounce-back links. So channel walls cost
+  // no halo traffic at all. Where the neighbour is this rank (an axis not
+  // split), the pairs are copies within the array (merged into runs); with
+  // another rank, lists of places packed into one message per neighbour:
+  // this rank's ghosts of region o (neighbour at o), and this rank's face
+  // that is region o of the neighbour at -o, both listed by visit_region
+  // over the ghost owner's subdomain.
   std::vector<PlaceRun> pairs;
+  m_peers.clear();
+  m_ghost_slot.clear();
+  m_ghost_velocity.clear();
+  m_ghost_velocity_version = ~std::uint64_t{0};
+  auto peer = [&](int rank) -> HaloPeer& {
+    for (HaloPeer& p : m_peers)
+      if (p.rank == rank)
+        return p;
+    m_peers.push_back({rank, {}, {}, {}, {}, {}, {}});
+    return m_peers.back();
+  };
+  const Vec3i me = m_grid.coords();
   for (int oz = -1; oz <= 1; ++oz)
     for (int oy = -1; oy <= 1; ++oy)
       for (int ox = -1; ox <= 1; ++ox) {
-        if (ox == 0 && oy == 0 && oz == 0)
+        const Vec3i o(ox, oy, oz);
+        if (o == Vec3i::Zero())
           continue;
-        const int o[3] = {ox, oy, oz};
-        int lo[3], hi[3], shift[3];
-        for (int d = 0; d < 3; ++d) {
-          if (o[d] == 0) {
-            lo[d] = 1;
-            hi[d] = m_n[d];
-            shift[d] = 0;
-          } else {
-            lo[d] = hi[d] = o[d] < 0 ? 0 : m_n[d] + 1;
-            shift[d] = o[d] < 0 ? m_n[d] : -m_n[d];
-          }
+        const int ahead = m_grid.neighbour(o), behind = m_grid.neighbour(-o);
+        if (ahead == m_grid.rank()) {
+          // this rank's own periodic image (behind is this rank too)
+          visit_region(m_origin, m_n, o, true, [&](const Vec3i& g, int q) {
+            const std::size_t ghost =
+                index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
+            if (m_flag[ghost] != 0 || m_flag[ghost - m_offset[q]] != 0)
+              return;
+            const std::size_t slot = static_cast<std::size_t>(q) * m_stride;
+            pairs.push_back({slot + ghost, slot + domain_index(g), 1, 0.0});
+          });
+          continue;
         }
-        const std::ptrdiff_t delta =
-            (static_cast<std::ptrdiff_t>(shift[2]) * m_pad[1] + shift[1]) * m_pad[0] + shift[0];
-        for (int q = 1; q < Q; ++q) {
-          bool moves_in = true;
-          for (int d = 0; d < 3; ++d)
-            if (o[d] != 0 && c[q][d] != o[d])
-              moves_in = false;
-          if (!moves_in)
-            continue;
-          // along an axis the region spans (o_d = 0), only ghosts whose
-          // node g - c_q lies in the domain take part; the others belong to
-          // a neighbouring edge or corner region
-          int qlo[3], qhi[3];
-          for (int d = 0; d < 3; ++d) {
-            qlo[d] = o[d] == 0 ? std::max(lo[d], 1 + c[q][d]) : lo[d];
-            qhi[d] = o[d] == 0 ? std::min(hi[d], m_n[d] + c[q][d]) : hi[d];
-          }
-          const std::size_t slot = static_cast<std::size_t>(q) * m_stride;
-          for (int z = qlo[2]; z <= qhi[2]; ++z)
-            for (int y = qlo[1]; y <= qhi[1]; ++y)
-              for (int x = qlo[0]; x <= qhi[0]; ++x) {
-                const std::size_t g = index(x, y, z);
-                if (m_flag[g] != 0 || m_flag[g - m_offset[q]] != 0)
-                  continue;
-                pairs.push_back({slot + g, slot + g + delta, 1, 0.0});
-              }
-        }
+        HaloPeer& in = peer(ahead);
+        visit_region(m_origin, m_n, o, true, [&](const Vec3i& g, int q) {
+          const std::size_t ghost =
+              index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
+          if (m_flag[ghost] != 0 || m_flag[ghost - m_offset[q]] != 0)
+            return;
+          in.ghost.push_back(static_cast<std::size_t>(q) * m_stride + ghost);
+        });
+        const Vec3i c_behind = me - o;
+        HaloPeer& out = peer(behind);
+        visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, true,
+                     [&](const Vec3i& g, int q) {
+                       const std::size_t face = domain_index(g);
+                       if (m_flag[face] != 0 || m_flag[face - m_offset[q]] != 0)
+                         return;
+                       out.face.push_back(static_cast<std::size_t>(q) * m_stride + face);
+                     });
+        // the coupling's stencils reach ghosts only across split axes (an
+        // unsplit axis wraps onto this rank's own nodes): their velocities
+        bool split_only = true;
+        for (int d = 0; d < 3; ++d)
+          split_only &= o[d] == 0 || m_grid.dims()[d] > 1;
+        if (!split_only)
+          continue;
+        visit_region(m_origin, m_n, o, false, [&](const Vec3i& g, int) {
+          const std::size_t ghost =
+              index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
+          m_ghost_slot.emplace(ghost, m_ghost_slot.size());
+          in.velocity_ghost.push_back(ghost);
+        });
+        visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, false,
+                     [&](const Vec3i& g, int) { out.velocity_face.push_back(domain_index(g)); });
       }
   m_halo = merge_runs(std::move(pairs));
+  m_ghost_velocity.assign(m_ghost_slot.size(), Vec3::Zero());
+}
+
+std::size_t LBFluid::halo_bytes() const {
+  std::size_t n = 0;
+  for (const HaloPeer& p : m_peers)
+    n += p.face.size(); // sent by a fill, as many as the ghosts folded back
+  return n * sizeof(double);
+}
+
+void LBFluid::exchange_remote(double* f, bool fill_ghosts) const {
+  if (m_peers.empty())
+    return;
+  // fill: faces out, ghosts in; fold: ghosts out, faces in (a copy, as in
+  // the periodic case: the face slot receives the population the
+  // neighbour's node pushed across, its only value in this update)
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * m_peers.size());
+  for (const HaloPeer& p : m_peers) {
+    const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
+    p.recv.resize(in.size());
+    requests.emplace_back();
+    MPI_Irecv(p.recv.data(), static_cast<int>(p.recv.size()), MPI_DOUBLE, p.rank, 71, m_grid.comm(),
+              &requests.back());
+  }
+  for (const HaloPeer& p : m_peers) {
+    const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
+    p.send.resize(out.size());
+    for (std::size_t i = 0; i < out.size(); ++i)
+      p.send[i] = f[out[i]];
+    requests.emplace_back();
+    MPI_Isend(p.send.data(), static_cast<int>(p.send.size()), MPI_DOUBLE, p.rank, 71, m_grid.comm(),
+              &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (const HaloPeer& p : m_peers) {
+    const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
+    for (std::size_t i = 0; i < in.size(); ++i)
+      f[in[i]] = p.recv[i];
+  }
+}
+
+void LBFluid::refresh_ghost_velocities() {
+  if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
+    return;
+  std::vector<MPI_Request> requests;
+  std::vector<std::vector<double>> in(m_peers.size()), out(m_peers.size());
+  for (std::size_t k = 0; k < m_peers.size(); ++k) {
+    in[k].resize(3 * m_peers[k].velocity_ghost.size());
+    requests.emplace_back();
+    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_DOUBLE, m_peers[k].rank, 72,
+              m_grid.comm(), &requests.back());
+  }
+  for (std::size_t k = 0; k < m_peers.size(); ++k) {
+    for (const std::size_t n : m_peers[k].velocity_face) {
+      const Vec3 u = velocity_at_index(n);
+      out[k].insert(out[k].end(), {u[0], u[1], u[2]});
+    }
+    requests.emplace_back();
+    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_DOUBLE, m_peers[k].rank, 72,
+              m_grid.comm(), &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (std::size_t k = 0; k < m_peers.size(); ++k)
+    for (std::size_t i = 0; i < m_peers[k].velocity_ghost.size(); ++i)
+      m_ghost_velocity[m_ghost_slot.at(m_peers[k].velocity_ghost[i])] =
+          Vec3(in[k][3 * i], in[k][3 * i + 1], in[k][3 * i + 2]);
+  m_ghost_velocity_version = m_state_version;
 }
 
 void LBFluid::apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first) {
@@ -387,7 +523,10 @@ void LBFluid::apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into
 }
 
 void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+  const auto start = std::chrono::steady_clock::now();
   apply_runs(f, m_halo, fill_ghosts);
+  exchange_remote(f, fill_ghosts);
+  m_halo_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void LBFluid::apply_bounce_back(double* f) const {
@@ -402,8 +541,8 @@ void LBFluid::apply_bounce_back(double* f) const {
 
 void LBFluid::report_instability(const BadNode& bad) {
   const std::size_t n = bad.node;
-  const Vec3i pc = padded_coordinates(n);
-  const int x = pc[0] - 1, y = pc[1] - 1, z = pc[2] - 1;
+  const Vec3i g = padded_coordinates(n) - Vec3i::Ones() + m_origin;
+  const int x = g[0], y = g[1], z = g[2];
   std::ostringstream msg;
   msg << "lattice-Boltzmann fluid unstable at node (" << x << ", " << y << ", " << z
       << ") in lattice update " << m_updates << ": density " << bad.rho
@@ -471,6 +610,28 @@ void LBFluid::step() {
         first_bad = i;
         bad_node = b;
       }
+    }
+  }
+  if (m_grid.size() > 1) {
+    // every rank learns of a bad node anywhere (the lowest rank's is
+    // reported by all), before anyone waits for a halo that will not come
+    int failing = first_bad < n_runs ? m_grid.rank() : m_grid.size();
+    MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
+    if (failing < m_grid.size()) {
+      std::string message;
+      if (failing == m_grid.rank()) {
+        try {
+          report_instability(bad_node);
+        } catch (const SimulationInstability& e) {
+          message = e.what();
+        }
+      }
+      int length = static_cast<int>(message.size());
+      MPI_Bcast(&length, 1, MPI_INT, failing, m_grid.comm());
+      message.resize(static_cast<std::size_t>(length));
+      MPI_Bcast(message.data(), length, MPI_CHAR, failing, m_grid.comm());
+      m_failed_update = message;
+      throw SimulationInstability(message);
     }
   }
   if (first_bad < n_runs)

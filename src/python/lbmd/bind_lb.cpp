@@ -32,84 +32,22 @@ lb::Collision collision_of(const std::string& name) {
   throw InputError("collision must be 'MRT', 'TRT' or 'BGK', got '" + name + "'");
 }
 
-/** Components per node of a property. */
-int components(const std::string& prop) {
-  if (prop == "velocity")
-    return 3;
-  if (prop == "density" || prop == "boundary")
-    return 1;
-  if (prop == "population")
-    return lb::d3q19::Q;
-  if (prop == "pressure_tensor")
-    return 9;
-  throw InputError("unknown lattice node property '" + prop + "'");
-}
-
 /** Values of property prop on the block lo <= (i, j, k) < hi, shape
- *  (nx, ny, nz, components) flattened. */
+ *  (nx, ny, nz, components); collective under MPI (LBFluid::get_block). */
 RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
                     const Vec3i& hi) {
-  const int nc = components(prop);
+  const std::vector<double> values = fluid.get_block(prop, lo, hi);
   const Vec3i n = hi - lo;
+  const py::ssize_t nc = static_cast<py::ssize_t>(values.size() / n.prod());
   RealArray out({static_cast<py::ssize_t>(n[0]), static_cast<py::ssize_t>(n[1]),
-                 static_cast<py::ssize_t>(n[2]), static_cast<py::ssize_t>(nc)});
-  double* o = out.mutable_data();
-  for (int i = lo[0]; i < hi[0]; ++i)
-    for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k) {
-        const Vec3i node(i, j, k);
-        if (prop == "velocity") {
-          const Vec3 u = fluid.node_velocity(node);
-          o[0] = u[0], o[1] = u[1], o[2] = u[2];
-        } else if (prop == "density") {
-          o[0] = fluid.node_density(node);
-        } else if (prop == "boundary") {
-          o[0] = fluid.node_boundary(node) + 1;
-        } else if (prop == "population") {
-          const auto f = fluid.node_populations(node);
-          std::copy(f.begin(), f.end(), o);
-        } else {
-          const lb::Mat3 p = fluid.node_pressure_tensor(node);
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b)
-              o[3 * a + b] = p(a, b);
-        }
-        o += nc;
-      }
+                 static_cast<py::ssize_t>(n[2]), nc});
+  std::copy(values.begin(), values.end(), out.mutable_data());
   return out;
 }
 
 void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                const RealArray& values) {
-  const int nc = components(prop);
-  const Vec3i n = hi - lo;
-  if (values.size() != static_cast<py::ssize_t>(n.prod()) * nc)
-    throw InputError(prop + ": expected " + std::to_string(nc) + " value(s) per node for " +
-                     std::to_string(n.prod()) + " node(s), got " + std::to_string(values.size()));
-  const double* v = values.data();
-  for (int i = lo[0]; i < hi[0]; ++i)
-    for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k) {
-        const Vec3i node(i, j, k);
-        // a block spanning boundary nodes sets the fluid nodes only; a single
-        // boundary node is an error (raised by the setters)
-        if (n.prod() > 1 && fluid.node_boundary(node) >= 0) {
-          v += nc;
-          continue;
-        }
-        if (prop == "velocity") {
-          fluid.set_node_density_velocity(node, fluid.node_density(node), Vec3(v[0], v[1], v[2]));
-        } else if (prop == "density") {
-          fluid.set_node_density_velocity(node, v[0], fluid.node_velocity(node));
-        } else if (prop == "population") {
-          lb::Populations f;
-          std::copy(v, v + nc, f.begin());
-          fluid.set_node_populations(node, f);
-        } else {
-          throw InputError(prop + " is read-only");
-        }
-        v += nc;
-      }
+  fluid.set_block(prop, lo, hi, std::vector<double>(values.data(), values.data() + values.size()));
 }
 
 } // namespace
@@ -118,7 +56,8 @@ void bind_lb(py::module_& m) {
   py::class_<LBFluid, std::shared_ptr<LBFluid>>(m, "LBFluid")
       .def(py::init([](double agrid, double tau, double dens, double visc, double bulk_visc,
                        const Vec3& ext_force_density, double kT, std::uint64_t seed,
-                       const std::string& collision, int n_threads, const Vec3& box_l) {
+                       const std::string& collision, int n_threads, const Vec3& box_l,
+                       const Vec3i& node_grid, bool balance) {
              lb::LBParams p;
              p.agrid = agrid;
              p.tau = tau;
@@ -130,11 +69,21 @@ void bind_lb(py::module_& m) {
              p.seed = seed;
              p.collision = collision_of(collision);
              p.n_threads = n_threads;
-             return std::make_shared<LBFluid>(p, BoxGeometry(box_l, {true, true, true}));
+             // every rank of the run takes part: the lattice is split over them
+             return std::make_shared<LBFluid>(p, BoxGeometry(box_l, {true, true, true}),
+                                              MPI_COMM_WORLD, node_grid, balance);
            }),
            py::arg("agrid"), py::arg("tau"), py::arg("dens"), py::arg("visc"), py::arg("bulk_visc"),
            py::arg("ext_force_density"), py::arg("kT"), py::arg("seed"), py::arg("collision"),
-           py::arg("n_threads"), py::arg("box_l"))
+           py::arg("n_threads"), py::arg("box_l"), py::arg("node_grid") = Vec3i::Zero(),
+           py::arg("balance") = true)
+      .def_property_readonly("node_grid", [](const LBFluid& f) { return f.domain().dims(); })
+      .def_property_readonly("decomposition",
+                             [](const LBFluid& f) { return f.domain().describe(); })
+      .def_property_readonly("local_origin", &LBFluid::local_origin)
+      .def_property_readonly("local_shape", &LBFluid::local_grid)
+      .def_property_readonly("halo_bytes", &LBFluid::halo_bytes)
+      .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
       .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
       .def_property_readonly("agrid", &LBFluid::agrid)
       .def_property_readonly("tau", &LBFluid::tau)

@@ -332,8 +332,10 @@ void bind_system(py::module_& m) {
            })
       .def("reset_run_timings", [](System& s) { s.run_timings = System::RunTimings{}; })
       .def_property_readonly("max_range", [](const System& s) { return s.nonbonded.max_range(); })
-      .def_property_readonly("rank", [](const System& s) { return s.comm.rank(); })
-      .def_property_readonly("n_ranks", [](const System& s) { return s.comm.size(); })
+      .def_property_readonly("rank",
+                             [](const System&) { return Communicator(MPI_COMM_WORLD).rank(); })
+      .def_property_readonly("n_ranks",
+                             [](const System&) { return Communicator(MPI_COMM_WORLD).size(); })
       // particles
       .def("add_particles", &add_particles)
       .def("remove_particle", &System::remove_particle)

@@ -76,7 +76,9 @@ class LBFluid(ParameterObject):
         core = _lbmd.LBFluid(agrid=self.agrid, tau=self.tau, dens=self.dens, visc=self.visc,
                              bulk_visc=self.bulk_visc, ext_force_density=self.ext_force_density,
                              kT=self.kT, seed=self.seed, collision=self.collision,
-                             n_threads=self.n_threads, box_l=system.box_l)
+                             n_threads=self.n_threads, box_l=system.box_l,
+                             node_grid=system.cell_system._node_grid or [0, 0, 0],
+                             balance=system.cell_system.balance == "fluid")
         system.lbboundaries._apply(core)
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)

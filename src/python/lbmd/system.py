@@ -17,6 +17,49 @@ class CellSystem:
 
     def __init__(self, system):
         self._system = system
+        self._node_grid = None
+        self._balance = "fluid"
+
+    @property
+    def node_grid(self):
+        """MPI ranks per axis of the fluid's subdomain grid, ``[nx, ny, nz]``.
+        Unset (None) before a fluid is added, the grid is chosen then for the
+        least halo per rank; set it before adding the fluid to choose it
+        (the product must equal the number of ranks)."""
+        fluid = self._system._core_fluid()
+        if fluid is not None:
+            return [int(n) for n in fluid.node_grid]
+        return None if self._node_grid is None else list(self._node_grid)
+
+    @node_grid.setter
+    def node_grid(self, value):
+        from mpi4py import MPI
+        size = MPI.COMM_WORLD.Get_size()
+        try:
+            grid = [int(n) for n in value]
+            ok = len(grid) == 3 and all(int(n) == n for n in value)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok or any(n < 1 for n in grid) or grid[0] * grid[1] * grid[2] != size:
+            raise ValueError(f"cell_system.node_grid: expected 3 positive integers whose product is the "
+                             f"number of MPI ranks ({size}), got {value!r}")
+        if self._system._core_fluid() is not None:
+            raise ValueError("cell_system.node_grid: set it before adding the lattice-Boltzmann fluid "
+                             "(the fluid is split when it is added)")
+        self._node_grid = grid
+
+    @property
+    def balance(self):
+        """How the fluid's subdomain cuts are placed: "fluid" (default: the
+        cuts move, when the boundaries are first set, so that every rank
+        holds about as many fluid nodes) or "even" (equal slabs)."""
+        return self._balance
+
+    @balance.setter
+    def balance(self, value):
+        if value not in ("fluid", "even"):
+            raise ValueError(f"cell_system.balance: expected 'fluid' or 'even', got {value!r}")
+        self._balance = value
 
     @property
     def skin(self):
@@ -286,6 +329,14 @@ class System:
     """
 
     _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects"}
+
+    def _core_fluid(self):
+        """The active fluid's C++ object, or None."""
+        for actor in self.__dict__.get("actors", ()):
+            core = getattr(actor, "_core", None)
+            if core is not None:
+                return core
+        return None
 
     def __init__(self, **kwargs):
         v = parse("System", [Param("box_l", "vec3"), Param("periodicity", "bool3", [True, True, True]),
