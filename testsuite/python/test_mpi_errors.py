@@ -17,8 +17,12 @@ MPIRUN = shutil.which("mpirun") or shutil.which("mpiexec")
 TIMEOUT = 60  # seconds; a hang is what the abort-on-error hook prevents
 
 # "#PID" in a script: each rank writes its pid to the folder given as its
-# argument, so that the test can check that no rank outlives mpirun.
-PID_LINE = "open(os.path.join(sys.argv[1], f'pid_{lbmd.rank}'), 'w').write(str(os.getpid()))\n"
+# argument, so that the test can check that no rank outlives mpirun. The
+# barrier: no rank fails (and ends the job) before all pids are written.
+PID_LINE = """with open(os.path.join(sys.argv[1], f'pid_{lbmd.rank}'), 'w') as f:
+    f.write(str(os.getpid()))
+lbmd.comm.barrier()
+"""
 
 
 def alive(pid):
