@@ -34,6 +34,32 @@ class Launcher(unittest.TestCase):
         self.assertEqual(out.returncode, 0)
         self.assertIn("--gdb", out.stdout)
         self.assertIn("--valgrind", out.stdout)
+        self.assertIn("--all-ranks", out.stdout)
+        self.assertIn("only rank\n0's stdout is shown", out.stdout)  # the help's last line is printed
+
+    def test_rank_from_each_mpi_launcher(self):
+        """The rank comes from Open MPI's, MPICH's or PMIx's environment: a
+        rank other than 0 prints nothing on stdout (but on stderr), unless
+        --all-ranks or PYOIF_ALL_RANKS=1. (No MPI here: the script does not
+        import lbmd, so the variables only reach the launcher.)"""
+        launcher = os.path.join(BUILD, "pyoif")
+        code = "import sys; print('OUT'); print('ERR', file=sys.stderr)"
+        for var in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+            for rank, all_ranks, args, shown in (("1", None, [], False), ("0", None, [], True),
+                                                 ("1", None, ["--all-ranks"], True), ("1", "1", [], True),
+                                                 ("1", "0", [], False)):
+                env = {k: v for k, v in os.environ.items()
+                       if k not in ("PYTHONPATH", "PYOIF_ALL_RANKS", "OMPI_COMM_WORLD_RANK", "PMI_RANK",
+                                    "PMIX_RANK")}
+                env[var] = rank
+                if all_ranks is not None:
+                    env["PYOIF_ALL_RANKS"] = all_ranks
+                out = subprocess.run([launcher, *args, "-c", code], capture_output=True, text=True,
+                                     env=env, timeout=120)
+                with self.subTest(var=var, rank=rank, all_ranks=all_ranks, args=args):
+                    self.assertEqual(out.returncode, 0, out.stderr)
+                    self.assertEqual(out.stdout, "OUT\n" if shown else "")
+                    self.assertIn("ERR", out.stderr)
 
     def test_error_exit_code(self):
         out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "-c",

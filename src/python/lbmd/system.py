@@ -1,8 +1,6 @@
 """lbmd.System and its parts: cell_system, integrator, thermostat, actors,
 analysis (ESPResSo 4.2 names)."""
 
-import warnings
-
 import numpy as np
 
 from . import _lbmd
@@ -301,27 +299,6 @@ class Analysis:
         return (sel.pos * m[:, None]).sum(axis=0) / m.sum()
 
 
-_replicated_ranks_noted = False
-
-
-def _note_replicated_ranks():
-    """Under `mpirun -np N` with N > 1, say once (rank 0) that every rank
-    computes the whole system: until the domain decomposition arrives, N
-    ranks are N identical copies, and a cluster job asking for them wastes
-    N - 1 of them."""
-    global _replicated_ranks_noted
-    if _replicated_ranks_noted:
-        return
-    _replicated_ranks_noted = True
-    from mpi4py import MPI
-    comm = MPI.COMM_WORLD
-    if comm.Get_size() > 1 and comm.Get_rank() == 0:
-        warnings.warn(f"lbmd runs the whole system on every MPI rank (no domain decomposition yet): these "
-                      f"{comm.Get_size()} ranks compute {comm.Get_size()} identical copies of the run, no faster "
-                      f"than one; use mpirun only to check scripts (doc/engine.md, 'Running in parallel')",
-                      RuntimeWarning, stacklevel=3)
-
-
 class System:
     """A simulation: box, particles, interactions, fluid, integrator.
 
@@ -344,7 +321,6 @@ class System:
                              Param("min_global_cut", "float", 0.0, check=non_negative)], kwargs)
         if not np.all(v["box_l"] > 0):
             raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {kwargs['box_l']!r}")
-        _note_replicated_ranks()
         d = self.__dict__
         d["_core"] = _lbmd.System(v["box_l"], v["periodicity"])
         d["_time_step_set"] = False
