@@ -53,14 +53,18 @@ struct StencilFrame {
   }
 };
 
-/** A stencil's key when no node of it is this rank's (another rank
- *  couples that particle). */
-constexpr std::uint64_t not_here = ~std::uint64_t{0};
+/** A stencil's key when no node of it is this rank's (another rank couples
+ *  that particle): this bit and the global index of the first node (so that
+ *  the key still changes when the stencil moves). */
+constexpr std::uint64_t not_here_bit = std::uint64_t{1} << 63;
+inline bool not_here(const CompactStencil& s) {
+  return (s.key & not_here_bit) != 0;
+}
 
 /** The stencil of pos; base_owned: its first node is this rank's (this rank
- *  gives the particle its force). key not_here: no node is this rank's. */
+ *  gives the particle its force); base: that node's global coordinates. */
 inline CompactStencil compact_stencil(const LBFluid& fluid, const StencilFrame& frame,
-                                      const Vec3& pos, bool& base_owned) {
+                                      const Vec3& pos, bool& base_owned, Vec3i& base) {
   const double inv_agrid = 1.0 / fluid.agrid();
   int lo[3];
   CompactStencil s;
@@ -73,21 +77,24 @@ inline CompactStencil compact_stencil(const LBFluid& fluid, const StencilFrame& 
     const double fl = std::floor(x);
     s.frac[d] = x - fl;
     const int n = frame.global[d];
+    base[d] = wrap_node(static_cast<int>(fl), n);
     if (!frame.split[d]) {
-      lo[d] = wrap_node(static_cast<int>(fl), n);
+      lo[d] = base[d];
       wraps |= std::uint64_t{lo[d] + 1 >= n} << d;
       continue;
     }
     // local coordinate of the first node, periodically in [-1, n - 1)
-    int l = wrap_node(static_cast<int>(fl) - frame.lower[d] + 1, n) - 1;
-    if (l > frame.local[d] - 1) {
-      s.key = not_here;
-      base_owned = false;
-      return s;
-    }
-    base_owned &= l >= 0;
+    const int l = wrap_node(base[d] - frame.lower[d] + 1, n) - 1;
+    base_owned &= l >= 0 && l <= frame.local[d] - 1;
     lo[d] = l;
   }
+  for (int d = 0; d < 3; ++d)
+    if (lo[d] > frame.local[d] - 1) { // no node of the stencil is this rank's
+      s.key = not_here_bit |
+              ((static_cast<std::uint64_t>(base[2]) * frame.global[1] + base[1]) * frame.global[0] +
+               base[0]);
+      return s;
+    }
   s.key = (std::uint64_t{fluid.padded_index_in_box(lo[0], lo[1], lo[2])} << 3) | wraps;
   return s;
 }
@@ -101,7 +108,8 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
   fluid.refresh_ghost_velocities();
   const StencilFrame frame(fluid);
   bool base_owned = false;
-  const CompactStencil s = compact_stencil(fluid, frame, box.folded(pos), base_owned);
+  Vec3i base;
+  const CompactStencil s = compact_stencil(fluid, frame, box.folded(pos), base_owned, base);
   Vec3 u = Vec3::Zero();
   if (base_owned) {
     const auto steps = fluid.stencil_steps();
@@ -127,6 +135,38 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
             "time step");
   throw std::logic_error("throw_outside: no particle outside");
 }
+
+namespace {
+/** Every rank gets every particle's coupling force from the rank that gives
+ *  it (the values are copied, so they are those of one rank: exact): one
+ *  allgather of each rank's forces, in particle order. */
+void share_forces(const DomainGrid& domain, const std::vector<int>& giver, std::vector<Vec3>& force,
+                  LBFluid::CouplingLedger& ledger) {
+  const int size = domain.size(), me = domain.rank();
+  std::vector<int>& counts = ledger.share_counts;
+  std::vector<int>& displs = ledger.share_displs;
+  counts.assign(size, 0);
+  displs.assign(size, 0);
+  std::vector<double>& mine = ledger.share_send;
+  mine.clear();
+  for (std::size_t i = 0; i < giver.size(); ++i) {
+    counts[giver[i]] += 3;
+    if (giver[i] == me)
+      mine.insert(mine.end(), {force[i][0], force[i][1], force[i][2]});
+  }
+  for (int r = 1; r < size; ++r)
+    displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<double>& all = ledger.share_recv;
+  all.resize(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(),
+                 displs.data(), MPI_DOUBLE, domain.comm());
+  for (std::size_t i = 0; i < giver.size(); ++i) {
+    const double* f = all.data() + displs[giver[i]];
+    displs[giver[i]] += 3;
+    force[i] = Vec3(f[0], f[1], f[2]);
+  }
+}
+} // namespace
 
 void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
                       const CouplingParams& params, std::uint64_t step, double time_step) {
@@ -178,7 +218,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (same_step) // the last pass's stencils are still in the ledger
     for (std::size_t i = 0; i < ledger.last_impulse.size(); ++i) {
       const CompactStencil& s = ledger.stencils[i];
-      if (s.key == not_here)
+      if (not_here(s))
         continue;
       const Vec3 retract = -0.5 * scale * ledger.last_impulse[i];
       for (int m = 0; m < 8; ++m) {
@@ -232,16 +272,21 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (ledger.node.size() < n_listed + 8 * n + 1) // room for every node to be new
     ledger.node.resize(n_listed + 8 * n + 1);
   std::size_t* node_list = ledger.node.data();
-  std::vector<std::uint8_t>& gives_force = ledger.gives_force;
-  gives_force.resize(n);
+  // the rank that gives each particle its force (that of its stencil's
+  // first node): looked up when the stencil moved, as the key tells
+  std::vector<int>& giver = ledger.giver;
+  if (split && giver.size() != n)
+    giver.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
     bool base_owned;
-    const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned);
-    gives_force[i] = base_owned;
+    Vec3i base;
+    const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned, base);
     const CompactStencil& old = stencils[i];
     const bool moved = renumber || s.key != old.key;
     stencils[i] = s;
-    if (!moved || s.key == not_here)
+    if (split && (moved || giver[i] < 0))
+      giver[i] = fluid.domain().owner_of(base);
+    if (!moved || not_here(s))
       continue;
     for (int m = 0; m < 8; ++m) {
       const std::size_t node = steps.node(s, m);
@@ -275,10 +320,8 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   coupling_force.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const CompactStencil& s = stencils[i];
-    if (s.key == not_here) {
-      coupling_force[i].setZero();
+    if (not_here(s))
       continue;
-    }
     const std::uint32_t* k = entries + 8 * i;
     double weight[8];
     Vec3 u = Vec3::Zero();
@@ -292,7 +335,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       for (int d = 0; d < 3; ++d)
         f[d] += noise * random::normal(key, d);
     }
-    coupling_force[i] = gives_force[i] ? f : Vec3::Zero();
+    coupling_force[i] = f;
     // the fluid gets -F time_step of momentum per MD step, applied at its next update
     const Vec3 impulse = -time_step * f;
     const Vec3 spread = (scale * fraction) * impulse;
@@ -300,8 +343,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
       state[k[m]].impulse += weight[m] * spread;
   }
   if (split)
-    MPI_Allreduce(MPI_IN_PLACE, coupling_force.data(), static_cast<int>(3 * n), MPI_DOUBLE, MPI_SUM,
-                  fluid.domain().comm());
+    share_forces(fluid.domain(), giver, coupling_force, ledger);
   Vec3 impulse_sum = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     p.force[i] += coupling_force[i];

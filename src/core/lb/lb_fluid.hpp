@@ -300,10 +300,13 @@ public:
     std::vector<NodeCoupling> node_coupling;
     std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
     std::vector<Stencil> stencils;                       ///< per particle of the current pass
-    /// per particle: this rank owns the stencil's first node and gives the
-    /// particle its force (decomposed lattice; always on one rank)
-    std::vector<std::uint8_t> gives_force;
-    std::vector<Vec3> coupling_force;           ///< per particle, this pass (summed over ranks)
+    /// decomposed lattice: per particle the rank of its stencil's first
+    /// node, which gives the particle its force (share_forces), and the
+    /// exchange's buffers
+    std::vector<int> giver;
+    std::vector<Vec3> coupling_force; ///< per particle, this pass
+    std::vector<int> share_counts, share_displs;
+    std::vector<double> share_send, share_recv;
     std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }
