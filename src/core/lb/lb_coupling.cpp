@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -342,8 +343,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     for (int m = 0; m < 8; ++m)
       state[k[m]].impulse += weight[m] * spread;
   }
-  if (split)
+  if (split) {
+    const auto start = std::chrono::steady_clock::now();
     share_forces(fluid.domain(), giver, coupling_force, ledger);
+    fluid.add_coupling_exchange_seconds(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
   Vec3 impulse_sum = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     p.force[i] += coupling_force[i];

@@ -152,8 +152,13 @@ public:
   std::size_t n_links() const { return m_n_links_global; }
   /** Bytes this rank sends to other ranks in one population halo exchange. */
   std::size_t halo_bytes() const;
-  /** Seconds spent in this rank's halo exchanges (waiting included). */
+  /** Seconds this rank spent in the population halo exchanges, waiting
+   *  included (the periodic copies within the rank too). */
   double halo_seconds() const { return m_halo_seconds; }
+  /** Seconds this rank spent in the coupling's exchanges with other ranks
+   *  (ghost velocities, particle forces), waiting included. */
+  double coupling_exchange_seconds() const { return m_coupling_exchange_seconds; }
+  void add_coupling_exchange_seconds(double s) const { m_coupling_exchange_seconds += s; }
 
   // --- node access: (i, j, k) in [0, N) ----------------------------------------
   // Node accessors give the node's values on the rank that owns it (check
@@ -472,7 +477,7 @@ private:
   std::vector<Vec3> m_ghost_velocity;
   std::unordered_map<std::size_t, std::size_t> m_ghost_slot; ///< padded ghost -> m_ghost_velocity
   std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
-  mutable double m_halo_seconds = 0.0;
+  mutable double m_halo_seconds = 0.0, m_coupling_exchange_seconds = 0.0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
   std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};
   Vec3 m_ext_lattice = Vec3::Zero();

@@ -486,6 +486,7 @@ void LBFluid::exchange_remote(double* f, bool fill_ghosts) const {
 void LBFluid::refresh_ghost_velocities() {
   if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
     return;
+  const auto start = std::chrono::steady_clock::now();
   std::vector<MPI_Request> requests;
   std::vector<std::vector<double>> in(m_peers.size()), out(m_peers.size());
   for (std::size_t k = 0; k < m_peers.size(); ++k) {
@@ -509,6 +510,8 @@ void LBFluid::refresh_ghost_velocities() {
       m_ghost_velocity[m_ghost_slot.at(m_peers[k].velocity_ghost[i])] =
           Vec3(in[k][3 * i], in[k][3 * i + 1], in[k][3 * i + 2]);
   m_ghost_velocity_version = m_state_version;
+  m_coupling_exchange_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void LBFluid::apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first) {

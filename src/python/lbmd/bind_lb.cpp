@@ -84,6 +84,7 @@ void bind_lb(py::module_& m) {
       .def_property_readonly("local_shape", &LBFluid::local_grid)
       .def_property_readonly("halo_bytes", &LBFluid::halo_bytes)
       .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
+      .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
       .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
       .def_property_readonly("agrid", &LBFluid::agrid)
       .def_property_readonly("tau", &LBFluid::tau)

@@ -128,14 +128,36 @@ class Integrator:
         'constraints' (walls), 'coupling' (thermostat: particle-fluid
         coupling or Langevin forces), 'lb_fluid' (the lattice update) and
         'other' (velocity Verlet, neighbour lists, checks); 'steps': the
-        steps run. Under mpirun, this rank's."""
+        steps run; 'communication': of 'total', the time in exchanges with
+        other ranks, waiting included (the fluid's halo, the coupling's
+        ghost velocities and forces).
+
+        Under mpirun this is collective (call it on every rank): every rank
+        gets the same dict, each value the largest over the ranks, with
+        'per_rank' (each rank's own dict), 'busy_max' and 'busy_mean' (the
+        largest and mean time a rank computed, 'total' less its
+        'communication': their ratio is the load balance)."""
+        from mpi4py import MPI
         t = self._system._core.run_timings()
         t["other"] = max(0.0, t["total"] - sum(t[k] for k, _ in _TIMED_PHASES))
-        return t
+        t["communication"] = max(0.0, self._communication_seconds() - self.__dict__.get("_comm_offset", 0.0))
+        comm = MPI.COMM_WORLD
+        if comm.Get_size() == 1:
+            return t
+        per_rank = comm.allgather(t)
+        out = {k: max(r[k] for r in per_rank) for k in t}
+        busy = [r["total"] - r["communication"] for r in per_rank]
+        out.update(per_rank=per_rank, busy_max=max(busy), busy_mean=sum(busy) / len(busy))
+        return out
+
+    def _communication_seconds(self):
+        fluid = self._system._core_fluid()
+        return fluid.halo_seconds + fluid.coupling_exchange_seconds if fluid is not None else 0.0
 
     def reset_timings(self):
         """Start the sums of ``timings()`` again from zero."""
         self._system._core.reset_run_timings()
+        self.__dict__["_comm_offset"] = self._communication_seconds()
 
     def timing_report(self):
         """``timings()`` as a table (seconds, milliseconds per step, share of
@@ -149,6 +171,10 @@ class Integrator:
             lines.append(f"{label:<44s} {t[key]:10.3f} {per_step:9.3f} {share:6.1f}%")
         lines.append(f"{'total (' + str(steps) + ' steps)':<44s} {total:10.3f} "
                      f"{(1e3 * total / steps if steps else 0.0):9.3f} {100.0 if total > 0 else 0.0:6.1f}%")
+        if "per_rank" in t:
+            lines.append(f"{len(t['per_rank'])} ranks (each line: the largest over them); exchanges with other "
+                         f"ranks {t['communication']:.3f} s; load balance (busy max/mean) "
+                         f"{t['busy_max'] / t['busy_mean'] if t['busy_mean'] > 0 else 1.0:.3f}")
         return "\n".join(lines)
 
 
