@@ -159,7 +159,13 @@ for t in set(ptypes):
 
 # --- run
 branch = {}  # cell index -> "lower"/"upper", decided when the centre is inside the branches
-with open(os.path.join(args.output, "cells.csv"), "w", newline="") as f:
+# under mpirun every rank runs this loop (the cells' queries are collective),
+# rank 0 writes the tables
+def writer_path(name):
+    return os.path.join(args.output, name) if lbmd.rank == 0 else os.devnull
+
+
+with open(writer_path("cells.csv"), "w", newline="") as f:
     out = csv.writer(f)
     out.writerow(["time", "cell", "type", "x", "y", "z", "surface", "volume", "diameter"])
     for i in range(n_cycles + 1):
@@ -176,7 +182,7 @@ with open(os.path.join(args.output, "cells.csv"), "w", newline="") as f:
         f.flush()
         print(f"cycle {i:3d}  time {system.time:8.1f} us  cells in branches: "
               f"lower {sum(v == 'lower' for v in branch.values())}, upper {sum(v == 'upper' for v in branch.values())}")
-with open(os.path.join(args.output, "branches.csv"), "w", newline="") as f:
+with open(writer_path("branches.csv"), "w", newline="") as f:
     w = csv.writer(f)
     w.writerow(["cell", "type", "branch"])
     for k, v in sorted(branch.items()):
