@@ -16,6 +16,7 @@ identity to its children's mpirun).
 """
 import csv
 import io
+import re
 import os
 import shutil
 import subprocess
@@ -47,43 +48,49 @@ def is_sum(key):
 
 
 def compare_states(ref, res, label):
-    """Raise AssertionError naming label and the quantity unless res equals
-    ref: exactly, or for sums over ranks within SUM_RTOL."""
+    """Raise AssertionError naming label, every quantity that differs and its
+    largest difference, unless res equals ref: exactly, or for sums over
+    ranks within SUM_RTOL."""
     missing, extra = sorted(set(ref) - set(res)), sorted(set(res) - set(ref))
     if missing or extra:
         raise AssertionError(f"{label}: quantities differ: missing {missing}, extra {extra}")
-    for key in sorted(ref):
-        if key == "ranks":
-            continue
-        a, b = np.asarray(res[key]), np.asarray(ref[key])
-        if a.shape != b.shape or a.dtype != b.dtype:
-            raise AssertionError(f"{label}, {key}: shape/dtype {a.shape} {a.dtype}, 1 rank: {b.shape} {b.dtype}")
-        if a.dtype.kind in "US":
-            if a.tolist() != b.tolist():
-                la, lb = str(a).splitlines(), str(b).splitlines()
-                first = next((i for i, (x, y) in enumerate(zip(la, lb)) if x != y), min(len(la), len(lb)))
-                raise AssertionError(f"{label}, {key}: text differs from line {first}: "
-                                     f"{la[first:first + 1]} vs 1 rank {lb[first:first + 1]}")
-            continue
-        if a.size == 0:
-            continue
-        diff = np.abs(a.astype(float) - b.astype(float))
-        where = np.unravel_index(np.nanargmax(diff), diff.shape) if np.any(diff > 0) else None
-        if is_sum(key):
-            atol = SUM_RTOL * float(np.max(np.abs(b)))   # components near 0 of a vector sum
-            bad = ~(diff <= atol + SUM_RTOL * np.abs(b))
-            if np.any(bad):
-                raise AssertionError(f"{label}, {key} (a sum over ranks, rtol {SUM_RTOL}): {np.sum(bad)} of "
-                                     f"{a.size} values differ, largest difference {np.max(diff):.3e} at "
-                                     f"{tuple(int(i) for i in where)} ({a[where]!r} vs 1 rank {b[where]!r})")
-            continue
-        if where is not None or not np.array_equal(a, b, equal_nan=True):
-            n = int(np.sum(~((a == b) | (np.isnan(a) & np.isnan(b)))))
-            at = tuple(int(i) for i in where) if where is not None else "NaN"
-            msg = (f"{label}, {key}: {n} of {a.size} values differ, largest difference "
-                   f"{np.nanmax(diff):.3e} at {at}")
-            np.testing.assert_array_equal(a, b, err_msg=msg)
-            raise AssertionError(msg)
+    failures = [msg for msg in (compare_one(key, res[key], ref[key]) for key in sorted(ref) if key != "ranks")
+                if msg]
+    if failures:
+        raise AssertionError(f"{label}: {len(failures)} quantities differ:\n  " + "\n  ".join(failures))
+
+
+def compare_one(key, res, ref):
+    """None if equal, else a line: what differs and by how much."""
+    a, b = np.asarray(res), np.asarray(ref)
+    if a.shape != b.shape or a.dtype != b.dtype:
+        return f"{key}: shape/dtype {a.shape} {a.dtype}, 1 rank: {b.shape} {b.dtype}"
+    if a.dtype.kind in "US":
+        if a.tolist() == b.tolist():
+            return None
+        la, lb = str(a).splitlines(), str(b).splitlines()
+        first = next((i for i, (x, y) in enumerate(zip(la, lb)) if x != y), min(len(la), len(lb)))
+        return f"{key}: text differs from line {first}: {la[first:first + 1]} vs 1 rank {lb[first:first + 1]}"
+    if a.size == 0:
+        return None
+    diff = np.abs(a.astype(float) - b.astype(float))
+    where = tuple(int(i) for i in np.unravel_index(np.nanargmax(diff), diff.shape)) if np.any(diff > 0) else None
+    if is_sum(key):
+        atol = SUM_RTOL * float(np.max(np.abs(b)))   # components near 0 of a vector sum
+        bad = ~(diff <= atol + SUM_RTOL * np.abs(b))
+        if not np.any(bad):
+            return None
+        return (f"{key} (a sum over ranks, rtol {SUM_RTOL}): {np.sum(bad)} of {a.size} values differ, largest "
+                f"difference {np.max(diff):.3e} at {where} ({a[where]!r} vs 1 rank {b[where]!r})")
+    try:
+        np.testing.assert_array_equal(a, b)
+    except AssertionError:
+        n = int(np.sum(~((a == b) | (np.isnan(a) & np.isnan(b)))))
+        if where is None:
+            return f"{key}: {n} of {a.size} values differ (NaN where the other has a number)"
+        return (f"{key}: {n} of {a.size} values differ, largest difference {np.nanmax(diff):.3e} at {where} "
+                f"({a[where]!r} vs 1 rank {b[where]!r})")
+    return None
 
 
 def load(path):
@@ -255,9 +262,9 @@ class MpiEquality(unittest.TestCase):
         for key, index in (("fluid_velocity", (3, 2, 1, 2)), ("part_pos", (0, 0))):
             bad = {k: v.copy() for k, v in ref.items()}
             bad[key][index] = np.nextafter(bad[key][index], np.inf)
-            with self.assertRaisesRegex(AssertionError, rf"bad, {key}: 1 of \d+ values differ, largest "
-                                                        r"difference [0-9.e+-]+ at " + str(index).replace("(", r"\(")
-                                                        .replace(")", r"\)")):
+            with self.assertRaisesRegex(AssertionError, rf"^bad: 1 quantities differ:\n  {key}: 1 of \d+ values "
+                                                        r"differ, largest difference [0-9.e+-]+ at " +
+                                                        re.escape(str(index))):
                 compare_states(ref, bad, "bad")
         bad = dict(ref, sum_fluid_momentum=ref["sum_fluid_momentum"] * (1 + 1e-10))
         with self.assertRaisesRegex(AssertionError, "sum_fluid_momentum"):
