@@ -39,6 +39,7 @@ STEPS = {"fluid": 40, "fluid_thermal": 40, "boundaries": 60, "cells": 100, "cell
          "bifurcation": 200}
 KT_THERMAL = 1e-3          # mpi_scenes.scene_fluid(thermal=True)
 KT_CELLS = 1e-4            # mpi_scenes.scene_cells_thermal
+RUN_TIMEOUT = 180          # s per mpirun; each takes under 5 s today (4 ranks on 2 cores)
 # sums over ranks (round-off depends on the decomposition), as documented
 SUM_RTOL = 1e-12
 
@@ -124,14 +125,28 @@ class MpiEquality(unittest.TestCase):
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1",
                    PYOIF_SOURCE_DIR=SOURCE)
         start = time.perf_counter()
-        proc = subprocess.run(cmd, cwd=self.tmp.name, capture_output=True, text=True, timeout=600, env=env)
+        proc = subprocess.Popen(cmd, cwd=self.tmp.name, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=env)
+        try:
+            stdout, stderr = proc.communicate(timeout=RUN_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            # SIGTERM first: mpirun then ends its ranks (SIGKILL would orphan them)
+            proc.terminate()
+            try:
+                stdout, stderr = proc.communicate(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                stdout, stderr = proc.communicate()
+            raise AssertionError(f"{scene} on {ranks} ranks{grid_tag}: not done after {RUN_TIMEOUT} s (a rank "
+                                 f"waiting in a collective call the others skipped?):\n{stdout[-2000:]}\n"
+                                 f"{stderr[-2000:]}") from None
         seconds = time.perf_counter() - start
-        if proc.returncode == 3 and "node_grid does not exist" in proc.stderr:
+        if proc.returncode == 3 and "node_grid does not exist" in stderr:
             self.skipTest(f"{scene} on {ranks} ranks with node_grid {node_grid}: the engine has no "
                           "system.cell_system.node_grid yet")
         if proc.returncode != 0 or not os.path.isfile(out):
             raise AssertionError(f"{scene} on {ranks} ranks{grid_tag}: {' '.join(cmd)} exited with "
-                                 f"{proc.returncode}:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+                                 f"{proc.returncode}:\n{stdout[-3000:]}\n{stderr[-3000:]}")
         if os.environ.get("PYOIF_MPI_EQUALITY_VERBOSE"):
             print(f"  {scene}{grid_tag} np {ranks}: {seconds:.1f} s", file=sys.stderr)
         result = load(out)
