@@ -172,8 +172,11 @@ def run_bifurcation(steps, node_grid):
             g = runpy.run_path(os.path.join(SOURCE, "samples", "cell_flow_in_bifurcation.py"), run_name="__main__")
     finally:
         sys.argv = argv
-    with open(os.path.join(folder, "cells.csv")) as f:
-        csv_text = f.read()
+    # the sample's tables are written by rank 0 (only its text is saved)
+    csv_text = ""
+    if rank == 0:
+        with open(os.path.join(folder, "cells.csv")) as f:
+            csv_text = f.read()
     lines = out.getvalue().splitlines()
     # the timing report (wall clock, differs from run to run) starts at its header
     table = []
