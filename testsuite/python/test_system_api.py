@@ -244,7 +244,12 @@ class SystemApi(unittest.TestCase):
         self.assertEqual(s.integrator.timings()["steps"], 40)
         self.assertGreater(s.integrator.timings()["total"], t["total"])
         s.integrator.reset_timings()
-        self.assertEqual(s.integrator.timings(), dict.fromkeys(("steps", "total", "other", "membrane") + phases, 0))
+        self.assertEqual(s.integrator.timings(),
+                         dict.fromkeys(("steps", "total", "other", "membrane", "communication") + phases, 0))
+        # one rank: no exchanges with other ranks (the periodic halo copies
+        # within the rank are not communication)
+        s.integrator.run(5)
+        self.assertEqual(s.integrator.timings()["communication"], 0.0)
 
     def test_features(self):
         lbmd.assert_features(["MASS", "EXTERNAL_FORCES", "SOFT_SPHERE"])

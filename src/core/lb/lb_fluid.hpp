@@ -152,8 +152,8 @@ public:
   std::size_t n_links() const { return m_n_links_global; }
   /** Bytes this rank sends to other ranks in one population halo exchange. */
   std::size_t halo_bytes() const;
-  /** Seconds this rank spent in the population halo exchanges, waiting
-   *  included (the periodic copies within the rank too). */
+  /** Seconds this rank spent in the population halo exchanges with other
+   *  ranks, waiting included (not the periodic copies within the rank). */
   double halo_seconds() const { return m_halo_seconds; }
   /** Seconds this rank spent in the coupling's exchanges with other ranks
    *  (ghost velocities, particle forces), waiting included. */

@@ -172,7 +172,7 @@ class Integrator:
         lines.append(f"{'total (' + str(steps) + ' steps)':<44s} {total:10.3f} "
                      f"{(1e3 * total / steps if steps else 0.0):9.3f} {100.0 if total > 0 else 0.0:6.1f}%")
         if "per_rank" in t:
-            lines.append(f"{len(t['per_rank'])} ranks (each line: the largest over them); exchanges with other "
+            lines.append(f"MPI, {len(t['per_rank'])} ranks (each line: the largest over them); exchanges with other "
                          f"ranks {t['communication']:.3f} s; load balance (busy max/mean) "
                          f"{t['busy_max'] / t['busy_mean'] if t['busy_mean'] > 0 else 1.0:.3f}")
         return "\n".join(lines)
