@@ -169,10 +169,16 @@ void share_forces(const DomainGrid& domain, const std::vector<int>& giver, std::
 }
 } // namespace
 
-void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
-                      const CouplingParams& params, std::uint64_t step, double time_step) {
-  if (params.gamma <= 0.0)
-    return;
+namespace {
+
+/** The coupling of the particles this rank computes (all, on one rank):
+ *  their forces into the ledger's coupling_force (zero where not computed),
+ *  their deposits into the fluid's force field. */
+template <class IsCurrent>
+void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
+                         const CouplingParams& params, std::uint64_t step, double time_step,
+                         const StencilFrame& frame, IsCurrent&& is_current) {
+
   // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
   // repeated computation for the same step deposits F dt / 2 after taking
   // back the in-flight half of the previous computation of this step
@@ -190,22 +196,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                      box.periodic()[2] ? HUGE_VAL : box.length()[2]);
     bool outside = false;
     for (std::size_t i = 0; i < n; ++i)
-      outside |=
-          !((p.pos[i].array() >= lower.array()).all() && (p.pos[i].array() <= upper.array()).all());
+      outside |= is_current(i) && !((p.pos[i].array() >= lower.array()).all() &&
+                                    (p.pos[i].array() <= upper.array()).all());
     if (outside)
       throw_outside(p, box);
   }
-  // Decomposed lattice (particles held by every rank): each rank couples
-  // the particles whose stencils touch its subdomain, in the same order as
-  // one rank would, deposits on its own nodes only, and the rank of a
-  // stencil's first node gives the particle its force (one sum over the
-  // ranks, where that rank alone contributes: exact). So every node receives
-  // the serial deposits in the serial order, and every particle the serial
-  // force, bit for bit.
-  const StencilFrame frame(fluid);
   const bool split = frame.any_split;
-  if (split)
-    fluid.refresh_ghost_velocities();
   auto mine = [&](std::size_t node) { return !split || fluid.is_domain_node(node); };
   auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
@@ -279,6 +275,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   if (split && giver.size() != n)
     giver.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
+    if (!is_current(i)) { // not up to date here: another rank couples it
+      stencils[i].key = not_here_bit;
+      if (split)
+        giver[i] = -1;
+      continue;
+    }
     bool base_owned;
     Vec3i base;
     const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned, base);
@@ -321,8 +323,11 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   coupling_force.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const CompactStencil& s = stencils[i];
-    if (not_here(s))
+    if (not_here(s)) {
+      coupling_force[i].setZero();
+      ledger.last_impulse[i].setZero();
       continue;
+    }
     const std::uint32_t* k = entries + 8 * i;
     double weight[8];
     Vec3 u = Vec3::Zero();
@@ -337,24 +342,13 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
         f[d] += noise * random::normal(key, d);
     }
     coupling_force[i] = f;
-    // the fluid gets -F time_step of momentum per MD step, applied at its next update
+    // the fluid gets -F time_step of momentum per MD step, applied at its
+    // next update (what a recomputation of this step takes back half of)
     const Vec3 impulse = -time_step * f;
+    ledger.last_impulse[i] = impulse;
     const Vec3 spread = (scale * fraction) * impulse;
     for (int m = 0; m < 8; ++m)
       state[k[m]].impulse += weight[m] * spread;
-  }
-  if (split) {
-    const auto start = std::chrono::steady_clock::now();
-    share_forces(fluid.domain(), giver, coupling_force, ledger);
-    fluid.add_coupling_exchange_seconds(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  Vec3 impulse_sum = Vec3::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    p.force[i] += coupling_force[i];
-    const Vec3 impulse = -time_step * coupling_force[i];
-    ledger.last_impulse[i] = impulse;
-    impulse_sum += impulse;
   }
   // the field is the size of the lattice and out of cache by now, and the
   // entries are read out of their order: both are requested a few nodes
@@ -371,7 +365,61 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     if (mine(node)) // a ghost's deposit is its owner's (who made the same)
       fluid.add_field_impulse(node, state[compact[node]].impulse);
   }
+}
+
+} // namespace
+
+void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
+                      const CouplingParams& params, std::uint64_t step, double time_step,
+                      const CouplingDistribution* distribution) {
+  if (params.gamma <= 0.0)
+    return;
+  // Decomposed lattice: each rank couples the particles whose stencils
+  // touch its subdomain, in the same order as one rank would, deposits on
+  // its own nodes only, and the rank of a stencil's first node gives the
+  // particle its force (a copy of that rank's value: exact). So every node
+  // receives the serial deposits in the serial order, and every particle the
+  // serial force, bit for bit. The ghost-layer velocities come first, before
+  // anything can fail on one rank and not on another.
+  const StencilFrame frame(fluid);
+  const bool split = frame.any_split;
+  if (split)
+    fluid.refresh_ghost_velocities();
+  const std::uint8_t* const current = distribution ? distribution->current : nullptr;
+  auto is_current = [current](std::size_t i) { return !current || current[i]; };
+  auto& ledger = fluid.coupling_ledger();
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  const bool distributed = distribution && distribution->share;
+  try {
+    couple_on_this_rank(fluid, p, box, params, step, time_step, frame, is_current);
+  } catch (...) {
+    if (distributed) { // the other ranks wait for this one's part of the exchange
+      ledger.coupling_force.assign(n, Vec3::Zero());
+      ledger.giver.assign(n, -1);
+      distribution->share(ledger.coupling_force, ledger.giver);
+    }
+    throw;
+  }
+  std::vector<Vec3>& coupling_force = ledger.coupling_force;
+  if (split) {
+    const auto start = std::chrono::steady_clock::now();
+    if (distributed)
+      distribution->share(coupling_force, ledger.giver);
+    else
+      share_forces(fluid.domain(), ledger.giver, coupling_force, ledger);
+    fluid.add_coupling_exchange_seconds(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  // in flight: half of this step's impulses, of the particles this rank
+  // integrates (summed over the ranks where they are spread)
+  Vec3 impulse_sum = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    p.force[i] += coupling_force[i];
+    impulse_sum += -time_step * coupling_force[i];
+  }
   ledger.in_flight = 0.5 * impulse_sum;
+  ledger.in_flight_partial = distributed;
 }
 
 } // namespace pyoif::lb

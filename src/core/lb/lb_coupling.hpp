@@ -12,6 +12,8 @@
 #include "system/box_geometry.hpp"
 
 #include <cstdint>
+#include <functional>
+#include <vector>
 
 namespace pyoif::lb {
 
@@ -21,11 +23,28 @@ struct CouplingParams {
   std::uint64_t seed = 0;
 };
 
+/** How the particles are spread over the ranks of a decomposed lattice. Null
+ *  (the default): every rank holds every particle up to date and gets every
+ *  force by one allgather. Else only the particles marked `current` are up
+ *  to date on this rank, and `share` gives each particle this rank
+ *  integrates its force: called with each particle's force as this rank
+ *  computed it (where its stencil touches this rank's subdomain) and the
+ *  giving rank per particle (that of the stencil's first node, -1 where this
+ *  rank did not compute it), it must leave in force[i] the force of every
+ *  particle this rank integrates and zero elsewhere. It is called on every
+ *  rank even when the computation failed (then with zero forces), before
+ *  the error is raised, so that no rank waits in vain. */
+struct CouplingDistribution {
+  const std::uint8_t* current = nullptr;
+  std::function<void(std::vector<Vec3>& force, const std::vector<int>& giver)> share;
+};
+
 /** Adds gamma (u - v) (+ noise) to each local particle's force and the opposite
  *  momentum to the fluid's force field. `step` counts MD steps (noise counter:
  *  RNG stream lb_coupling, key = particle id). */
 void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
-                      const CouplingParams& params, std::uint64_t step, double time_step);
+                      const CouplingParams& params, std::uint64_t step, double time_step,
+                      const CouplingDistribution* distribution = nullptr);
 
 /** Fluid velocity at pos (MD units), trilinear in the 8 surrounding nodes;
  *  collective on a decomposed lattice. */

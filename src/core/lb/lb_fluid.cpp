@@ -779,10 +779,14 @@ Vec3 LBFluid::total_momentum() const {
           for (int d = 0; d < 3; ++d)
             j[d] += m_field[3 * (r.start + i) + d];
   }
-  if (m_grid.size() > 1)
+  Vec3 in_flight = m_ledger.in_flight;
+  if (m_grid.size() > 1) {
     MPI_Allreduce(MPI_IN_PLACE, j.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
-  // in_flight is the whole coupling's (every rank knows all its impulses)
-  return j * std::pow(m_p.agrid, 4) / m_p.tau - m_ledger.in_flight;
+    // the coupling's: every rank's share, or known whole on every rank
+    if (m_ledger.in_flight_partial)
+      MPI_Allreduce(MPI_IN_PLACE, in_flight.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
+  }
+  return j * std::pow(m_p.agrid, 4) / m_p.tau - in_flight;
 }
 
 namespace {

@@ -256,6 +256,8 @@ public:
     /// with that call's stencils, still in `stencils`)
     std::vector<Vec3> last_impulse;
     Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
+    /// in_flight is this rank's share (particles spread over the ranks)
+    bool in_flight_partial = false;
     /// The stencil of a particle as its first node (lowest index on every
     /// axis), per axis whether the second node lies across the box's
     /// periodic edge, and the fraction towards it: node m = (dx, dy, dz)
