@@ -12,14 +12,59 @@
 namespace pyoif {
 
 void System::prepare_step(int moved) {
-  if (moved < 0 ? cells.needs_rebuild(particles, time) : moved > 0)
-    cells.rebuild(particles, box, nonbonded.max_range());
-  else
-    cells.update_ghosts(particles, box);
+  if (!m_spread.active) {
+    if (moved < 0 ? cells.needs_rebuild(particles, time) : moved > 0)
+      cells.rebuild(particles, box, nonbonded.max_range());
+    else
+      cells.update_ghosts(particles, box);
+    return;
+  }
+  // Particles spread over the ranks: every rank tests its own (moved: 1
+  // beyond the skin, 0 not, -1 test here, -3 too fast a step), all agree
+  // on the largest code: 0 the copies are refreshed; 1 all copies made
+  // current, re-sort, owners anew; 2 (runaway) and 3 (too fast) all copies
+  // current, then every rank raises the error of the serial code.
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  int code = moved == -3 ? 3 : moved > 0 ? 1 : 0;
+  const bool assigned = m_spread.layout == p.layout_version && m_spread.owner.size() == n &&
+                        m_spread.mol == p.mol_version && m_spread.bonds == m_bonds_version &&
+                        m_spread.cuts == m_lb->domain().cuts();
+  if (!assigned)
+    code = std::max(code, 1);
+  if (moved == -1) {
+    const Vec3* x0 = cells.displacement_reference(n);
+    if (!x0)
+      code = std::max(code, 1);
+    const double limit2 = cells.displacement_limit2();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (assigned && !m_spread.owned[i])
+        continue;
+      if (cells.runaway(p.pos[i]))
+        code = std::max(code, 2);
+      else if (x0 && (p.pos[i] - x0[i]).squaredNorm() > limit2)
+        code = std::max(code, 1);
+    }
+  }
+  code = agree(code);
+  if (code == 0) {
+    exchange_current(false);
+    cells.update_ghosts(p, box);
+    return;
+  }
+  if (assigned)
+    gather_all_particles();
+  if (code == 3)
+    report_fast_particle(m_time_step);
+  if (code == 2)
+    cells.needs_rebuild(p, time); // names the runaway particle
+  cells.rebuild(p, box, nonbonded.max_range());
+  assign_owners();
 }
 
 void System::add_membrane_forces(Energies* e) {
-  membranes.add_forces(bonded, m_bonds_version, particles, box, time);
+  membranes.add_forces(bonded, m_bonds_version, particles, box, time, owned_mask(),
+                       m_spread.version);
   if (!e)
     return;
   // energies per bonded interaction: each one's bonds compiled alone and
@@ -31,6 +76,7 @@ void System::add_membrane_forces(Energies* e) {
           if constexpr (is_membrane_bond<IA>) {
             membrane::Selection select;
             select.bond_id = static_cast<int>(bond_id);
+            select.owned = owned_mask(); // each cell's energy on one rank
             double energy = 0.0;
             for (const auto& cell :
                  membrane::analyse(bonded, select, particles, box, time, nullptr))
@@ -52,12 +98,19 @@ void System::add_bonded_forces(Energies* e) {
           using IA = std::decay_t<decltype(ia)>;
           if constexpr (!is_membrane_bond<IA>) {
             double energy_sum = 0.0;
-            for_each_bond(ia, entry.bonds, p, box, time,
-                          [&](const auto& idx, const auto& f, double energy, const auto&) {
-                            for (std::size_t k = 0; k < idx.size(); ++k)
-                              p.force[idx[k]] += f[k];
-                            energy_sum += energy;
-                          });
+            const std::uint8_t* own = owned_mask();
+            for_each_bond(
+                ia, entry.bonds, p, box, time,
+                [&](const auto& idx, const auto& f, double energy, const auto&) {
+                  // spread: each owner its own particles' forces, the
+                  // energy once (the first particle's owner)
+                  for (std::size_t k = 0; k < idx.size(); ++k)
+                    if (!own || own[idx[k]])
+                      p.force[idx[k]] += f[k];
+                  if (!own || own[idx[0]])
+                    energy_sum += energy;
+                },
+                own);
             if (e) {
               e->bonded += energy_sum;
               e->bonded_by_id[static_cast<int>(bond_id)] += energy_sum;
@@ -73,9 +126,14 @@ void System::add_nonbonded_forces(Energies* e) {
   const std::size_t n_local = p.n_local();
   double energy = 0.0;
   PairContext c;
+  // spread: a pair of particles of two ranks is computed by both, each for
+  // its own particle (the same value, so a particle's sum is the serial one)
+  const std::uint8_t* own = owned_mask();
   for (const auto& pair : cells.pairs()) {
     const int a = pair[0], b = pair[1];
     const int owner_b = p.owner(b);
+    if (own && !own[a] && !own[owner_b])
+      continue;
     const PairParams* params = nonbonded.find(p.type[a], p.type[owner_b]);
     if (!params)
       continue;
@@ -88,8 +146,14 @@ void System::add_nonbonded_forces(Energies* e) {
     c.mol_j = p.mol_id[owner_b];
     c.normal_i = p.normal[a];
     c.normal_j = p.normal[owner_b];
-    const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
-    p.force[a] += f;
+    double pair_energy = 0.0;
+    const Vec3 f = pair_force(*params, c, e ? &pair_energy : nullptr);
+    if (!own || own[a]) {
+      energy += pair_energy;
+      p.force[a] += f;
+    }
+    if (own && !own[owner_b])
+      continue;
     if (static_cast<std::size_t>(b) < n_local)
       p.force[b] -= f;
     else
@@ -117,8 +181,9 @@ void System::add_constraint_forces(Energies* e) {
     // the exact distance of particles farther than the range from their
     // bounding box), the force where a particle is within its pair's range
     constraint->shape->signed_distances(p.pos.data(), p.n_local(), range, dist.data());
+    const std::uint8_t* own = owned_mask();
     for (std::size_t i = 0; i < p.n_local(); ++i) {
-      if (dist[i] >= range)
+      if (dist[i] >= range || (own && !own[i]))
         continue;
       const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
       if (!params)
@@ -164,7 +229,10 @@ void System::add_langevin_forces() {
   const double noise = std::sqrt(2.0 * gamma * m_langevin.kT / m_time_step);
   const random::Key key{m_langevin.seed, static_cast<std::uint64_t>(random::Stream::langevin),
                         step_count, 0};
+  const std::uint8_t* own = owned_mask();
   for (std::size_t i = 0; i < p.n_local(); ++i) {
+    if (own && !own[i])
+      continue;
     Vec3 f = -gamma * p.vel[i];
     if (noise > 0.0) {
       random::Key k = key;
@@ -185,27 +253,78 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
   RunTimings untimed;
   RunTimings& t = timings ? *timings : untimed;
   PhaseClock clock(timings != nullptr);
-  add_membrane_forces(e);
+  // Spread over the ranks, an error of one rank's phase must not leave the
+  // others waiting in an exchange: it is kept, the later phases are
+  // skipped on that rank, the exchanges still run, and at the end every
+  // rank raises the lowest failing rank's error.
+  std::exception_ptr failure;
+  auto phase = [&](auto&& compute) {
+    if (!m_spread.active) {
+      compute();
+      return;
+    }
+    if (failure)
+      return;
+    try {
+      compute();
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  };
+  phase([&] { add_membrane_forces(e); });
+  if (m_spread.active && has_membrane_bonds())
+    exchange_current(true); // normals of other ranks' nodes for the contacts
   clock.lap(t.membrane);
-  add_bonded_forces(e);
+  phase([&] { add_bonded_forces(e); });
   clock.lap(t.bonded);
-  add_nonbonded_forces(e);
+  phase([&] { add_nonbonded_forces(e); });
   clock.lap(t.non_bonded);
-  add_constraint_forces(e);
+  phase([&] { add_constraint_forces(e); });
   clock.lap(t.constraints);
   if constexpr (!with_energy) {
     if (m_langevin.active && m_langevin.gamma > 0.0)
-      add_langevin_forces();
-    if (m_lb && m_lb_coupling.active)
-      lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
+      phase([&] { add_langevin_forces(); });
+    if (m_lb && m_lb_coupling.active) {
+      if (m_spread.active) {
+        const lb::CouplingDistribution spread{
+            m_spread.current.data(), [this](std::vector<Vec3>& f, const std::vector<int>& giver) {
+              share_coupling_forces(f, giver);
+            }};
+        try { // every rank takes part, a failed one too (see couple_particles)
+          lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step,
+                               &spread);
+        } catch (...) {
+          if (!failure)
+            failure = std::current_exception();
+        }
+      } else {
+        lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
+      }
+    }
     clock.lap(t.coupling);
   }
+  if (m_spread.active)
+    raise_agreed(failure);
 }
 
 void System::compute_forces() {
   prepare_step();
   force_loop<false>(nullptr);
   mark_forces_valid();
+  m_spread.stale = m_spread.active; // forces on the owners only
+}
+
+bool System::has_membrane_bonds() const {
+  bool any = false;
+  for (const BondedEntry& entry : bonded)
+    std::visit(
+        [&](const auto& ia) {
+          using IA = std::decay_t<decltype(ia)>;
+          if constexpr (is_membrane_bond<IA>)
+            any |= entry.bonds.size() > 0;
+        },
+        entry.interaction);
+  return any;
 }
 
 Energies System::compute_energies() {
@@ -214,11 +333,17 @@ Energies System::compute_energies() {
   const std::vector<Vec3> saved = particles.force;
   force_loop<true>(&e);
   particles.force = saved;
+  const std::uint8_t* own = owned_mask();
   for (std::size_t i = 0; i < particles.n_local(); ++i)
-    e.kinetic += 0.5 * particles.mass[i] * particles.vel[i].squaredNorm();
-  e.kinetic = comm.allreduce_sum(e.kinetic);
-  e.bonded = comm.allreduce_sum(e.bonded);
-  e.non_bonded = comm.allreduce_sum(e.non_bonded);
+    if (!own || own[i])
+      e.kinetic += 0.5 * particles.mass[i] * particles.vel[i].squaredNorm();
+  // spread: every rank's share (the same keys on every rank)
+  const Communicator& c = own ? m_spread.comm : comm;
+  e.kinetic = c.allreduce_sum(e.kinetic);
+  e.bonded = c.allreduce_sum(e.bonded);
+  e.non_bonded = c.allreduce_sum(e.non_bonded);
+  for (auto& [id, energy] : e.bonded_by_id)
+    energy = c.allreduce_sum(energy);
   return e;
 }
 
@@ -310,7 +435,12 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     const double h0 = n > 0 ? half_kick[0] : 0.0;
     double worst2 = 0.0, step2 = 0.0;
     bool runaway = false;
+    // spread over the ranks: the particles this rank integrates (the mask
+    // changes at re-sorts)
+    const std::uint8_t* own = owned_mask();
     for (std::size_t i = 0; i < n; ++i) {
+      if (own && !own[i]) // another rank's particle
+        continue;
       const double h = decltype(uniform)::value ? h0 : half_kick[i];
       const Vec3 f = p.force[i];
       Vec3 v = p.vel[i];
@@ -341,8 +471,11 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
         worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
       runaway |= cells.runaway(x);
     }
-    if (step2 > step_limit2 && !runaway)
+    if (step2 > step_limit2 && !runaway) {
+      if (m_spread.active)
+        return -3; // raised on every rank in prepare_step
       report_fast_particle(dt);
+    }
     return runaway ? -1 : (!x0 || worst2 > limit2) ? 1 : 0;
   };
   auto advance = [&](auto kicks) {
@@ -353,15 +486,18 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     return any_external ? advance_with(kicks, no{}, yes{}) : advance_with(kicks, no{}, no{});
   };
   auto second_kick = [&] {
+    const std::uint8_t* own = owned_mask();
     for (std::size_t i = 0; i < n; ++i)
-      for (int d = 0; d < 3; ++d)
-        if (!(p.fixed[i] & (1u << d)))
-          p.vel[i][d] += half_kick[i] * p.force[i][d];
+      if (!own || own[i])
+        for (int d = 0; d < 3; ++d)
+          if (!(p.fixed[i] & (1u << d)))
+            p.vel[i][d] += half_kick[i] * p.force[i][d];
   };
   if (n_steps == 0) {
     mark_forces_valid();
     return;
   }
+  m_spread.stale = m_spread.active; // the owners' state only, from here on
   // until the run ends normally the forces are those of some step in
   // between, or partial after an exception: a later run recomputes them
   m_forces_valid = false;

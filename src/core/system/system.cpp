@@ -181,7 +181,9 @@ bool System::remove_bond(int bond_id, const std::vector<int>& ids) {
 void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
   if (fluid)
     fluid->validate(box, m_time_step);
+  synchronize(); // every copy current before the particles' spread changes
   m_lb = std::move(fluid);
+  update_spread();
   if (!m_lb)
     m_lb_coupling.active = false;
   m_lb_substep = 0;
@@ -211,8 +213,12 @@ int System::lb_steps_per_update() const {
 
 Vec3 System::particle_momentum() const {
   Vec3 p = Vec3::Zero();
+  const std::uint8_t* own = owned_mask();
   for (std::size_t i = 0; i < particles.n_local(); ++i)
-    p += particles.mass[i] * particles.vel[i];
+    if (!own || own[i])
+      p += particles.mass[i] * particles.vel[i];
+  if (own)
+    m_spread.comm.allreduce_sum(p.data(), 3);
   return p;
 }
 

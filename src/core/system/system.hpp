@@ -16,6 +16,7 @@
 #include "system/box_geometry.hpp"
 
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
@@ -193,7 +194,70 @@ public:
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;
 
+  // --- particles over the ranks of a decomposed lattice (system_parallel.cpp)
+  // Every rank stores every particle (same local indices everywhere), but
+  // with a decomposed fluid each particle is integrated, and its forces
+  // computed, by one rank: the rank whose subdomain holds the lattice node
+  // of its cell's first node (a whole cell on one rank, with the membrane
+  // driver's lanes), or of its own position. The other ranks' copies are
+  // kept current only where needed (coupling stencils, pair contacts,
+  // bonds across ranks), point to point every step; all copies are made
+  // current at every re-sort of the cell system and before a query.
+  /** Whether the particles are spread over the ranks. */
+  bool particles_spread() const { return m_spread.active; }
+  /** Collective: makes every rank's copy of every particle current (before
+   *  reading or writing particles from Python). */
+  void synchronize();
+  /** Per local index: this rank integrates the particle (null: all). */
+  const std::uint8_t* owned_mask() const {
+    // none before the first assignment after particles were added or
+    // removed (every copy is current then)
+    return m_spread.active && m_spread.layout == particles.layout_version &&
+                   m_spread.owned.size() == particles.n_local()
+               ? m_spread.owned.data()
+               : nullptr;
+  }
+  /** Ranks of the particles' spread (the world under a decomposed fluid). */
+  const Communicator& spread_comm() const { return m_spread.comm; }
+
 private:
+  /** The spread of the particles (particles_spread()). */
+  struct Spread {
+    bool active = false;
+    Communicator comm{MPI_COMM_SELF};
+    std::vector<int> owner;            ///< per local index (-1: current everywhere)
+    std::vector<std::uint8_t> owned;   ///< owner == this rank (or -1)
+    std::vector<std::uint8_t> current; ///< owned or received every step
+    struct Peer {
+      int rank;
+      std::vector<int> send, recv; ///< local indices, sorted
+      std::vector<double> send_buffer, recv_buffer;
+    };
+    std::vector<Peer> peers;
+    bool stale = false;        ///< copies out of date since the last run
+    std::uint64_t version = 0; ///< counts changes of the owned set (membrane cache key)
+    std::uint64_t layout = 0, mol = 0, bonds = 0; ///< the versions at the assignment
+    std::array<std::vector<int>, 3> cuts;         ///< the lattice's cuts at the assignment
+  };
+  Spread m_spread;
+  /** Switches the spread on or off with the fluid (collective). */
+  void update_spread();
+  /** Every rank sends its particles' state to all (allgather). */
+  void gather_all_particles();
+  /** Owners and the point-to-point lists, after a re-sort (all ranks alike). */
+  void assign_owners();
+  /** Sends the owners' positions and velocities (or normals) to the ranks
+   *  that keep copies. */
+  void exchange_current(bool normals);
+  /** The coupling's forces to their particles' owners (CouplingDistribution). */
+  void share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver);
+  /** Largest code over the ranks (one allreduce; the code itself on one rank). */
+  int agree(int code) const;
+  /** Whether any membrane bond exists (the same on every rank). */
+  bool has_membrane_bonds() const;
+  /** Raises on every rank the error of the lowest failing rank (collective;
+   *  local: this rank's error or null). Returns when no rank failed. */
+  void raise_agreed(const std::exception_ptr& local) const;
   /** Re-sort if needed and update ghosts. moved: the integrator's drift
    *  already tested the displacements (1 beyond the skin, 0 not); -1: test. */
   void prepare_step(int moved = -1);

@@ -59,7 +59,8 @@ std::vector<int> indices_of(const System& s, const IdArray& ids) {
   return idx;
 }
 
-RealArray get_vectors(const System& s, const std::string& field, const IdArray& ids) {
+RealArray get_vectors(System& s, const std::string& field, const IdArray& ids) {
+  s.synchronize(); // spread over ranks: every copy current (collective)
   const auto idx = indices_of(s, ids);
   RealArray out({static_cast<py::ssize_t>(idx.size()), py::ssize_t{3}});
   auto w = out.mutable_unchecked<2>();
@@ -94,6 +95,7 @@ RealArray get_vectors(const System& s, const std::string& field, const IdArray& 
 }
 
 void set_vectors(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  s.synchronize();
   const auto idx = indices_of(s, ids);
   if (values.ndim() != 2 || values.shape(0) != static_cast<py::ssize_t>(idx.size()) ||
       values.shape(1) != 3)
@@ -157,6 +159,7 @@ py::array get_scalars(const System& s, const std::string& field, const IdArray& 
 }
 
 void set_scalars(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  s.synchronize();
   enum class Scalar { mass, type, mol_id, fix };
   const Scalar which = field == "mass"     ? Scalar::mass
                        : field == "type"   ? Scalar::type
@@ -227,6 +230,7 @@ void set_scalars(System& s, const std::string& field, const IdArray& ids, const 
 IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const RealArray& vel,
                       const RealArray& mass, const IdArray& type, const IdArray& mol_id,
                       const RealArray& ext_force, const IdArray& fixed) {
+  s.synchronize();
   const py::ssize_t n = pos.shape(0);
   auto id_r = ids.unchecked<1>();
   auto p_r = pos.unchecked<2>();
@@ -271,6 +275,7 @@ IdArray all_ids(const System& s) {
 /** Pairs of particle ids closer than `distance` (minimum image), from the
  *  neighbour search: used by tests against brute force and by analysis. */
 std::vector<std::tuple<int, int>> get_pairs(System& s, double distance) {
+  s.synchronize();
   if (distance > s.nonbonded.max_range() + s.cells.skin)
     throw InputError("get_pairs: distance must not exceed the interaction range "
                      "(largest cutoff + skin)");
@@ -315,6 +320,7 @@ void bind_system(py::module_& m) {
             s.cells.skin = skin;
             s.cells.invalidate();
           })
+      .def_property_readonly("particles_spread", &System::particles_spread)
       .def_property_readonly("n_rebuilds", [](const System& s) { return s.cells.n_rebuilds(); })
       .def("run_timings",
            [](const System& s) {
@@ -338,8 +344,16 @@ void bind_system(py::module_& m) {
                              [](const System&) { return Communicator(MPI_COMM_WORLD).size(); })
       // particles
       .def("add_particles", &add_particles)
-      .def("remove_particle", &System::remove_particle)
-      .def("clear_particles", &System::clear_particles)
+      .def("remove_particle",
+           [](System& s, int pid) {
+             s.synchronize();
+             s.remove_particle(pid);
+           })
+      .def("clear_particles",
+           [](System& s) {
+             s.synchronize();
+             s.clear_particles();
+           })
       .def("n_particles", [](const System& s) { return s.particles.n_local(); })
       .def("exists", [](const System& s, int pid) { return s.particles.index(pid) >= 0; })
       .def("all_ids", &all_ids)

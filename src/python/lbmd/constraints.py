@@ -1,5 +1,7 @@
 """Shape-based constraints: a shape acting on particles through the
 non-bonded table entry (particle type, constraint's particle_type)."""
+import numpy as np
+
 from . import _lbmd
 from .shapes import Shape
 from .validation import Param, ParameterObject, non_negative
@@ -28,8 +30,15 @@ class ShapeBasedConstraint(Constraint):
             self.shape._core, self.particle_type, self.penetrable, self.only_positive))
 
     def total_force(self):
-        """Force the particles exert on the shape, at the last force calculation."""
-        return self._core.total_force.copy()
+        """Force the particles exert on the shape, at the last force calculation.
+        Under mpirun with a fluid the particles are spread over the ranks:
+        then this is a sum over them (collective: call it on every rank)."""
+        force = np.array(self._core.total_force, dtype=float)
+        system_core = self.__dict__.get("_system_core")
+        if system_core is not None and system_core.particles_spread:
+            from mpi4py import MPI
+            MPI.COMM_WORLD.Allreduce(MPI.IN_PLACE, force)
+        return force
 
 
 class Constraints:
@@ -48,6 +57,7 @@ class Constraints:
         if any(x is c for x in self._list):
             raise ValueError("constraints.add: this constraint was already added (its force would count twice)")
         self._system._core.add_constraint(c._core)
+        c.__dict__["_system_core"] = self._system._core
         self._list.append(c)
         return c
 

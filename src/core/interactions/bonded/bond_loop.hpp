@@ -22,10 +22,13 @@ template <int K> struct BondInput {
   const double* reference = nullptr; ///< per-bond reference values (or nullptr)
 };
 
-/** Visit every bond: sink(local_indices, forces, energy, input). */
+/** Visit every bond: sink(local_indices, forces, energy, input); with owned
+ *  (per local index, particles spread over ranks) only the bonds with a
+ *  particle this rank owns. */
 template <class IA, class Sink>
 void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
-                   const BoxGeometry& box, double time, Sink&& sink) {
+                   const BoxGeometry& box, double time, Sink&& sink,
+                   const std::uint8_t* owned = nullptr) {
   constexpr int K = IA::n_particles;
   BondInput<K> in;
   std::array<int, K> idx;
@@ -38,6 +41,13 @@ void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
       if (idx[k] < 0)
         throw SimulationInstability(std::string(IA::name) + " bond refers to particle " +
                                     std::to_string(ids[k]) + ", which does not exist");
+    }
+    if (owned) {
+      bool any = false;
+      for (int k = 0; k < K; ++k)
+        any |= owned[idx[k]] != 0;
+      if (!any)
+        continue;
     }
     in.x[0] = p.pos[idx[0]];
     in.v[0] = p.vel[idx[0]];

@@ -262,6 +262,8 @@ void Model::compile(const std::vector<BondedEntry>& bonded, const Selection& sel
               const int mol = p.mol_id[p.index(ids[0])];
               if (select.mol_id >= 0 && mol != select.mol_id)
                 continue;
+              if (select.owned && !select.owned[p.index(ids[0])])
+                continue; // another rank's cell
               const auto [it, inserted] =
                   cell_of_mol.try_emplace(mol, static_cast<int>(by_cell.size()));
               if (inserted)
@@ -348,11 +350,14 @@ std::vector<std::pair<int, int>> Model::nodes_by_id(const ParticleStore& p) cons
 }
 
 void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t bonds_version,
-                           ParticleStore& p, const BoxGeometry& box, double time) {
-  const Key key{p.layout_version, p.mol_version, bonds_version, lanes, true};
+                           ParticleStore& p, const BoxGeometry& box, double time,
+                           const std::uint8_t* owned, std::uint64_t owners_version) {
+  const Key key{p.layout_version,           p.mol_version, bonds_version,
+                owned ? owners_version : 0, lanes,         true};
   if (!(key == m_key)) {
     Selection all;
     all.lanes = lanes;
+    all.owned = owned;
     m_key = Key{}; // a compile that throws leaves no stale model behind
     m_model.compile(bonded, all, p);
     ++counts.compiles;

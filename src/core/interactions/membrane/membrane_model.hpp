@@ -76,6 +76,9 @@ struct Selection {
   int mol_id = -1;   ///< only this cell's bonds (-1: all cells)
   int term = -1;     ///< only this term's moduli (-1: all)
   bool lanes = true; ///< batches of four cells per vector lane where a topology has them
+  /// per local index: only the cells whose bonds' first particles this rank
+  /// owns (particles spread over ranks; null: all)
+  const std::uint8_t* owned = nullptr;
 };
 
 /** Counters of the evaluations, so that tests see which path ran. */
@@ -194,17 +197,18 @@ public:
    *  the particles, node normals written. bonds_version: the System's count
    *  of bond changes. */
   void add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t bonds_version,
-                  ParticleStore& p, const BoxGeometry& box, double time);
+                  ParticleStore& p, const BoxGeometry& box, double time,
+                  const std::uint8_t* owned = nullptr, std::uint64_t owners_version = 0);
   /** Drops the compiled model (the next call compiles again). */
   void invalidate() { m_key = Key{}; }
 
 private:
   struct Key {
-    std::uint64_t layout = 0, mol = 0, bonds = 0;
+    std::uint64_t layout = 0, mol = 0, bonds = 0, owners = 0;
     bool lanes = true, valid = false;
     bool operator==(const Key& o) const {
-      return layout == o.layout && mol == o.mol && bonds == o.bonds && lanes == o.lanes &&
-             valid == o.valid;
+      return layout == o.layout && mol == o.mol && bonds == o.bonds && owners == o.owners &&
+             lanes == o.lanes && valid == o.valid;
     }
   };
   Key m_key;

@@ -1,0 +1,634 @@
+#!/usr/bin/env pyoif
+"""Parallel scaling of the paper's bifurcation scene: the shape of the
+PyOIF paper's Table 1 (seconds per 1000 steps at 1..10 cores with 0, 5, 10,
+20, 40, 60 RBCs of 374 nodes; doc/model.md) measured at 1 and 2 MPI ranks,
+and a model that projects it to 8, 10, 64 and 1024 ranks for today's
+design (the fluid split over the ranks, the particles replicated on every
+rank) and for the planned one (particles and whole cells owned by ranks,
+doc/architecture.md "Who owns a membrane", option (b)).
+
+    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/scaling.py [--cells 0 5 10 20 40 60]
+        [--ranks 1 2] [--steps 500] [--cycles 1] [--repeats 2] [--tall-height 26]
+        [--project 0 40 60] [--project-ranks 2 8 10 64 1024] [--seeds 3]
+        [--csv scaling.csv] [--model-csv scaling_model.csv]
+
+(as root, Open MPI needs OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+in the environment). At default settings it takes about 3-5 minutes on 2 cores.
+
+Measurement. Each configuration runs samples/cell_flow_in_bifurcation.py
+--full (box 160x40x22, agrid 1 um, time step = tau = 0.1 us, RBCs of 374
+nodes and the stiff rare cell of 642 nodes) with --cells N, --cycles and
+--steps as given, under `mpirun --oversubscribe --bind-to none -np K
+build/pyoif` (K = 1: the launcher alone), OMP_NUM_THREADS=1, unchanged: the
+sample runs inside this script's --child mode (runpy), which afterwards adds
+what the sample does not print: every rank's halo bytes and exchange
+seconds, the decomposition, the fluid mask and the particle positions. The
+figures are read from the sample's own timing report (integrator.
+timing_report(): the time steps alone; set-up and seeding are not in it;
+under MPI each phase the largest over the ranks, and the last line the
+exchanges with other ranks and the load balance busy max/mean); the least
+of --repeats runs counts. Printed per configuration: seconds per 1000 steps,
+the cost per cell (t(n) - t(0)) / n, the speed-up t1/tK and efficiency
+t1/(K tK), the load balance, the communication (halo + coupling exchanges,
+waiting included) per step, the halo bytes a rank sends per lattice update
+(lbf._core.halo_bytes, the largest over ranks; one update per MD step here)
+and the coupling bytes a rank receives per MD step, 24 N (K-1)/K for N
+particles (the MPI_Allgatherv of each particle's force, 3 doubles, from the
+rank of its stencil's first node; about N/K given by each rank).
+The sample's seeding region holds at most 48 RBCs + the rare cell at the
+paper's height 20 (box 160x40x22); a count that does not fit is measured at
+--height --tall-height (default 26: box 160x40x28, 27 % more lattice), with
+its own 0-cell baseline, and marked "h26"; --tall-height 0 reports it as
+not fitting instead.
+
+Model. Per MD step, from the 1-rank run of a configuration (the phases of
+integrator.timings()):
+  L  the lattice update (lb_fluid), divided by fluid nodes: a rank's share
+     is its fluid nodes / all fluid nodes (cuts balanced by fluid nodes per
+     plane, the grid with the least halo surface, as DomainGrid chooses);
+  C  the coupling (thermostat): c_div scales with the particles whose
+     interpolation stencil touches the rank's subdomain, c_rep (finding the
+     stencils, the loop over all particles) is replicated; the split is fitted
+     to the 2-rank run (each rank's coupling less its exchange seconds);
+  R  the particles' own work: membranes M (cells' moduli) + the rest O
+     (bonds, contacts, walls, velocity Verlet, neighbour lists).
+Communication, alpha-beta (as ownership_model.py: alpha = 1.5 us per
+message, beta = 10 GB/s), per MD step on the busiest rank:
+  halo        n_peers alpha + 8 (crossing fluid populations, counted link by
+              link on the mask: both ends fluid, D3Q19)/beta;
+  ghost velocities for the coupling's stencils: n_peers alpha + 24 (nodes of
+              the ghost layer on split axes)/beta;
+  allgather   (today) ceil(log2 P) alpha + 24 N (P-1)/P / beta;
+  particle ghosts (planned) positions out and forces back: 2 n_peers alpha
+              + 48 (particles within cutoff + skin = 1.3 um outside the
+              subdomain)/beta;
+  cells (b)   (planned) each cell's membrane evaluated by the rank of its
+              first node: 72 bytes per remote node (positions in, forces
+              and normals back, ownership_model.py) / beta + n_peers alpha
+              for the normals' extra round.
+Today:   t(P) = max_r [L F_r/F + c_rep + c_div S_r/N + R] + comm
+Planned: t(P) = max_r [L F_r/F + C S_r/N + M V_r/V + O N_r/N] + comm
+with F_r fluid nodes, S_r particles whose stencil touches the subdomain,
+N_r particles held (by position), V_r nodes of the cells the rank evaluates
+(cells of 374 and 642 nodes), and comm the sum of the rounds above (each
+the busiest rank's; a bulk-synchronous step waits for the slowest).
+Efficiency t(1)/(P t(P)). Strong scaling: the fixed scene (--project cell
+counts; the 60-cell scene at its measured height). Weak scaling: one copy
+of the scene per rank, copies side by side along x (the grid with the least
+halo), so a rank's subdomain is one copy with two x neighbours: today every
+rank holds all P N particles (R and c_rep grow P-fold, the allgather
+carries 24 N (P-1) bytes); planned: every rank its own copy's particles,
+efficiency t(1)/t(P). Cells are placed as ownership_model.py places them
+(uniform centres in the channel, random orientation, no overlap test;
+--seeds placements averaged): cells spread over the channel as in a long
+run, not the seeding's cluster. The model ignores cache effects (a smaller
+subdomain is faster per node), second-neighbour messages below one cell
+per subdomain, particle migration, and collectives other than those named
+(e.g. the cells' volumes); it gives the order of magnitude.
+"""
+import argparse
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from benchmark_csv import write_rows
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+SAMPLE = os.path.join(ROOT, "samples", "cell_flow_in_bifurcation.py")
+
+ALPHA = 1.5e-6      # s per message (as ownership_model.py)
+BETA = 10e9         # bytes per s
+RBC_NODES, RARE_NODES = 374, 642
+GHOST_RANGE = 1.3   # largest cutoff (1.0, node-wall) + skin 0.3
+FULL_HEIGHT = 20.0  # the sample's --full channel height
+
+# the paper's Table 1: CPU s per 1000 steps, cores -> {cells: s}
+PAPER = {1: {0: 48.14, 5: 55.90, 10: 62.68, 20: 84.37, 40: 145.00, 60: 242.47},
+         3: {0: 17.40, 5: 21.27, 10: 22.70, 20: 32.14, 40: 53.56, 60: 93.56},
+         5: {0: 12.79, 5: 16.88, 10: 19.13, 20: 23.78, 40: 37.35, 60: 58.97},
+         6: {0: 11.02, 5: 14.82, 10: 15.98, 20: 22.90, 40: 36.04, 60: 53.31},
+         10: {0: 8.31, 5: 11.61, 10: 13.96, 20: 18.31, 40: 26.67, 60: 40.22}}
+
+# D3Q19 velocities less the rest one
+D3Q19 = [c for c in ((x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1))
+         if 0 < sum(map(abs, c)) <= 2]
+
+
+# ---------------------------------------------------------------- child mode
+def child(json_path, argv):
+    """Run the sample (argv: its path and arguments) on every rank, then
+    write what rank 0 needs besides its report (collective calls on all)."""
+    import runpy
+    from mpi4py import MPI
+    sys.argv = list(argv)
+    g = runpy.run_path(argv[0], run_name="__main__")
+    system, lbf = g["system"], g["lbf"]
+    t = system.integrator.timings()  # collective under MPI
+    core = lbf._core
+    comm = MPI.COMM_WORLD
+    ranks = comm.allgather(dict(halo_bytes=int(core.halo_bytes), halo_seconds=float(core.halo_seconds),
+                                coupling_exchange_seconds=float(core.coupling_exchange_seconds),
+                                decomposition=str(core.decomposition)))
+    mask = np.asarray(lbf[:, :, :].boundary) != 0  # collective
+    pos = np.asarray(system.part.all().pos, dtype=float)
+    if comm.Get_rank() == 0:
+        np.savez(json_path + ".npz", solid=mask, pos=pos)
+        with open(json_path, "w") as f:
+            json.dump(dict(timings=t, ranks=ranks, n_particles=len(pos), box=list(system.box_l)), f)
+
+
+# ----------------------------------------------------------- measurement
+class NoRoom(Exception):
+    """The sample could not seed that many cells."""
+
+
+def parse_report(out):
+    """The sample's timing report: phase seconds by label, total, steps, and
+    under MPI the exchanges' seconds and the load balance."""
+    rep = {"phases": {}}
+    for line in out.splitlines():
+        m = re.match(r"total \((\d+) steps\)\s+([\d.]+)\s", line)
+        if m:
+            rep["steps"], rep["total"] = int(m.group(1)), float(m.group(2))
+            continue
+        m = re.search(r"(\d+) ranks\b.*exchanges with other ranks ([\d.]+) s.*load balance[^)]*\)\s*([\d.]+)", line)
+        if m:
+            rep["ranks"], rep["communication"], rep["balance"] = int(m.group(1)), float(m.group(2)), float(m.group(3))
+            continue
+        m = re.match(r"(.+?)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)%$", line)
+        if m:
+            rep["phases"][m.group(1).strip()] = float(m.group(2))
+    if "total" not in rep:
+        raise RuntimeError("no timing report in the sample's output:\n" + out[-2000:])
+    return rep
+
+
+def run_once(args, cells, ranks, height, tmp):
+    js = os.path.join(tmp, f"run_{cells}_{ranks}_{height}.json")
+    sample_args = [SAMPLE, "--full", "--cells", str(cells), "--cycles", str(args.cycles), "--steps",
+                   str(args.steps), "--output", os.path.join(tmp, "out")]
+    if height != FULL_HEIGHT:
+        sample_args += ["--height", f"{height:g}"]
+    cmd = [args.pyoif, os.path.abspath(__file__), "--child", js, "--"] + sample_args
+    if ranks > 1:
+        cmd = [args.mpirun, "--oversubscribe", "--bind-to", "none", "-np", str(ranks)] + cmd
+    env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    if p.returncode != 0:
+        if "SeedingError" in p.stderr:
+            raise NoRoom(p.stderr.strip().splitlines()[-1])
+        raise RuntimeError(f"{' '.join(cmd)} failed ({p.returncode}):\n{p.stderr[-3000:]}")
+    rep = parse_report(p.stdout)
+    if ranks > 1 and "balance" not in rep:
+        raise RuntimeError("no load-balance line in the sample's timing report under MPI:\n" + p.stdout[-2000:])
+    with open(js) as f:
+        data = json.load(f)
+    with np.load(js + ".npz") as z:
+        data["solid"], data["pos"] = z["solid"], z["pos"]
+    data["report"] = rep
+    return data
+
+
+def measure(args, cells, ranks, height, tmp):
+    """The quietest of --repeats runs (least time per step)."""
+    runs = [run_once(args, cells, ranks, height, tmp) for _ in range(args.repeats)]
+    return min(runs, key=lambda d: d["report"]["total"] / d["report"]["steps"])
+
+
+# ------------------------------------------------------------------ model
+def choose_dims(ranks, nodes):
+    """DomainGrid::choose_dims: least halo surface of a subdomain, ties to more
+    ranks along x, then y."""
+    best, best_surface = (ranks, 1, 1), math.inf
+    for dx in range(ranks, 0, -1):
+        if ranks % dx:
+            continue
+        for dy in range(ranks // dx, 0, -1):
+            if (ranks // dx) % dy:
+                continue
+            d = (dx, dy, ranks // dx // dy)
+            if any(d[a] > nodes[a] for a in range(3)):
+                continue
+            s = sum(nodes[(a + 1) % 3] / d[(a + 1) % 3] * nodes[(a + 2) % 3] / d[(a + 2) % 3]
+                    for a in range(3) if d[a] > 1)
+            if s < best_surface * (1 - 1e-12):
+                best, best_surface = d, s
+    return best
+
+
+def balanced_cuts(dims, fluid):
+    """DomainGrid::balance with the fluid nodes per plane as weights."""
+    cuts = []
+    for d in range(3):
+        n, k_max = fluid.shape[d], dims[d]
+        even = [n * k // k_max for k in range(k_max + 1)]
+        w = fluid.sum(axis=tuple(a for a in range(3) if a != d)).astype(float)
+        if k_max == 1 or w.sum() <= 0:
+            cuts.append(even)
+            continue
+        prefix = np.concatenate([[0.0], np.cumsum(w)])
+        c = [0] * (k_max + 1)
+        c[k_max] = n
+        for j in range(1, k_max):
+            target = prefix[-1] * j / k_max
+            k = int(np.searchsorted(prefix, target, side="left"))
+            if k > 0 and target - prefix[k - 1] < prefix[k] - target:
+                k -= 1
+            c[j] = min(max(k, c[j - 1] + 1), n - (k_max - j))
+        cuts.append(c)
+    return cuts
+
+
+def parse_decomposition(text, nodes):
+    """'2x1x1, cuts x: 0 80 160' -> dims, cuts."""
+    dims = tuple(int(v) for v in text.split(",")[0].split("x"))
+    cuts = [[n * k // dims[d] for k in range(dims[d] + 1)] for d, n in enumerate(nodes)]
+    for axis, values in re.findall(r"cuts ([xyz]):([\d ]+)", text):
+        cuts["xyz".index(axis)] = [int(v) for v in values.split()]
+    return dims, cuts
+
+
+class Grid:
+    """A Cartesian grid of subdomains over a lattice of shape `nodes`."""
+
+    def __init__(self, dims, cuts, nodes):
+        self.dims, self.cuts, self.nodes = tuple(dims), [np.asarray(c) for c in cuts], tuple(nodes)
+        self.size = int(np.prod(dims))
+
+    def rank(self, cx, cy, cz):
+        dx, dy, dz = self.dims
+        return ((np.asarray(cz) % dz) * dy + np.asarray(cy) % dy) * dx + np.asarray(cx) % dx
+
+    def coords_of_node(self, g, d):
+        g = np.asarray(g) % self.nodes[d]
+        return np.searchsorted(self.cuts[d], g, side="right") - 1
+
+    def owner_of_nodes(self, gx, gy, gz):
+        return self.rank(self.coords_of_node(gx, 0), self.coords_of_node(gy, 1), self.coords_of_node(gz, 2))
+
+    def owner_field(self):
+        ix, iy, iz = np.meshgrid(*(np.arange(n) for n in self.nodes), indexing="ij")
+        return self.owner_of_nodes(ix, iy, iz)
+
+    def coords(self, r):
+        dx, dy, _ = self.dims
+        return r % dx, (r // dx) % dy, r // (dx * dy)
+
+    def extent(self, r):
+        c = self.coords(r)
+        return np.array([self.cuts[d][c[d] + 1] - self.cuts[d][c[d]] for d in range(3)])
+
+    def lower(self, r):
+        c = self.coords(r)
+        return np.array([self.cuts[d][c[d]] for d in range(3)])
+
+    def peers(self, r):
+        c = self.coords(r)
+        out = {int(self.rank(c[0] + ox, c[1] + oy, c[2] + oz))
+               for ox in (-1, 0, 1) for oy in (-1, 0, 1) for oz in (-1, 0, 1)}
+        out.discard(int(r))
+        return len(out)
+
+
+def rank_loads(grid, solid, scene):
+    """Per-rank arrays: fluid nodes, halo bytes sent per update, ghost-velocity
+    bytes, neighbour ranks, particles touching (stencil), held, ghosts, cell
+    nodes evaluated, (b) bytes; scene: (positions, cell index per node,
+    nodes per cell)."""
+    P = grid.size
+    fluid = ~solid
+    owner = grid.owner_field()
+    F_r = np.bincount(owner[fluid], minlength=P)
+    halo = np.zeros(P)
+    for c in D3Q19:
+        dst_owner = np.roll(owner, shift=[-c[0], -c[1], -c[2]], axis=(0, 1, 2))
+        dst_fluid = np.roll(fluid, shift=[-c[0], -c[1], -c[2]], axis=(0, 1, 2))
+        cross = fluid & dst_fluid & (owner != dst_owner)
+        halo += np.bincount(owner[cross], minlength=P)
+    halo *= 8.0
+    split = np.array([d > 1 for d in grid.dims], dtype=int)
+    vel = np.array([24.0 * (np.prod(grid.extent(r) + 2 * split) - np.prod(grid.extent(r))) for r in range(P)])
+    peers = np.array([grid.peers(r) for r in range(P)])
+    pos, cell_of, cell_nodes = scene
+    N = len(pos)
+    L = np.array(grid.nodes, dtype=float)
+    node = np.floor(pos).astype(int)
+    held = grid.owner_of_nodes(node[:, 0], node[:, 1], node[:, 2])
+    N_r = np.bincount(held, minlength=P)
+    lo = np.floor(pos - 0.5).astype(int)
+    owners8 = np.stack([grid.owner_of_nodes(lo[:, 0] + a, lo[:, 1] + b, lo[:, 2] + c)
+                        for a in (0, 1) for b in (0, 1) for c in (0, 1)], axis=1)
+    pairs = np.unique(np.arange(N)[:, None] * P + owners8)
+    S_r = np.bincount(pairs % P, minlength=P)
+    ghosts = np.zeros(P)
+    for r in range(P):
+        inside = np.ones(N, dtype=bool)
+        for d in range(3):
+            if grid.dims[d] == 1:
+                continue
+            x = (pos[:, d] - grid.lower(r)[d]) % L[d]
+            inside &= (x < grid.extent(r)[d] + GHOST_RANGE) | (x > L[d] - GHOST_RANGE)
+        ghosts[r] = np.count_nonzero(inside & (held != r))
+    first = np.searchsorted(cell_of, np.arange(len(cell_nodes)))  # each cell's first node
+    evaluator = held[first]
+    V_r = np.bincount(evaluator, weights=cell_nodes, minlength=P)
+    b_bytes = np.zeros(P)
+    remote = held != evaluator[cell_of]
+    np.add.at(b_bytes, evaluator[cell_of[remote]], 72.0)
+    np.add.at(b_bytes, held[remote], 72.0)
+    return dict(F_r=F_r, halo=halo, vel=vel, peers=peers, S_r=S_r, N_r=N_r, ghosts=ghosts, V_r=V_r,
+                b_bytes=b_bytes, F=fluid.sum(), N=N, V=float(np.sum(cell_nodes)))
+
+
+def random_scene(box, n_rbc, rng, meshes):
+    """ownership_model.scene for n_rbc RBCs + the rare cell in a box: node
+    positions (folded), cell index per node, nodes per cell."""
+    import ownership_model as om
+    rbc, rare = meshes
+    pos, cell_of, sizes = [], [], []
+    for k, m in enumerate([rbc] * n_rbc + [rare]):
+        lo = np.array([0.0, 5.0 + 4.0, 1.0 + (1.5 if k < n_rbc else 7.6)])
+        hi = np.array([box[0], 35.0 - 4.0, box[2] - lo[2]])
+        centre = rng.uniform(lo, np.maximum(hi, lo + 1e-9))
+        pos.append((m @ om.random_rotation(rng).T + centre) % box)
+        cell_of.append(np.full(len(m), k))
+        sizes.append(len(m))
+    return np.concatenate(pos), np.concatenate(cell_of), np.array(sizes, dtype=float)
+
+
+def meshes():
+    import ownership_model as om
+    return om.mesh("rbc374", 3.91)[0], om.mesh("sphere642", 7.5)[0]
+
+
+def step_time(cal, loads, design, P, weak=False):
+    """(busy, comm) seconds per step on the busiest rank, model of the module
+    docstring. cal: per-step seconds L, c_rep, c_div, M, O."""
+    L, c_rep, c_div, M, O = (cal[k] for k in ("L", "c_rep", "c_div", "M", "O"))
+    F, N, V = loads["F"], loads["N"], loads["V"]
+    if weak:  # one copy per rank: the 2-copy model's rank 0, copies P-fold
+        F, N, V = F / 2, N / 2, V / 2
+        pick = slice(0, 1)
+        peers = min(P - 1, 2)
+    else:
+        pick = slice(None)
+        peers = loads["peers"][pick].max() if P > 1 else 0
+    Fr, Sr, Nr, Vr = (loads[k][pick] for k in ("F_r", "S_r", "N_r", "V_r"))
+    halo = loads["halo"][pick].max() if P > 1 else 0.0
+    vel = loads["vel"][pick].max() if P > 1 else 0.0
+    neighbour = (2 * peers * ALPHA + (halo + vel) / BETA) if P > 1 else 0.0
+    if design == "today":
+        copies = P if weak else 1  # every rank holds every copy's particles
+        busy = (L * Fr / F + c_rep * copies + c_div * np.minimum(Sr / N, 1.0) + (M + O) * copies).max()
+        n_all = N * copies
+        gather = (math.ceil(math.log2(P)) * ALPHA + 24.0 * n_all * (P - 1) / P / BETA) if P > 1 else 0.0
+        return busy, neighbour + gather
+    busy = (L * Fr / F + (c_rep + c_div) * np.minimum(Sr / N, 1.0) + M * Vr / V + O * Nr / N).max()
+    if P == 1:
+        return busy, 0.0
+    ghosts = 2 * peers * ALPHA + 48.0 * loads["ghosts"][pick].max() / BETA
+    cells = peers * ALPHA + loads["b_bytes"][pick].max() / BETA
+    return busy, neighbour + ghosts + cells
+
+
+def calibrate(one, two):
+    """Per-step seconds of the 1-rank run's phases, and the coupling's
+    replicated part fitted to the 2-rank run."""
+    t = one["timings"]
+    steps = t["steps"]
+    cal = dict(L=t["lb_fluid"] / steps, C=t["coupling"] / steps, M=t["membrane"] / steps,
+               O=(t["bonded"] + t["non_bonded"] + t["constraints"] + t["other"]) / steps)
+    cal["c_rep"], cal["c_div"], cal["fit"] = 0.0, cal["C"], "no 2-rank run: all of C divisible"
+    if two is not None:
+        nodes = np.array(two["solid"].shape)
+        dims, cuts = parse_decomposition(two["ranks"][0]["decomposition"], nodes)
+        grid = Grid(dims, cuts, nodes)
+        pos = two["pos"]
+        lo = np.floor(pos - 0.5).astype(int)
+        owners8 = np.stack([grid.owner_of_nodes(lo[:, 0] + a, lo[:, 1] + b, lo[:, 2] + c)
+                            for a in (0, 1) for b in (0, 1) for c in (0, 1)], axis=1)
+        pairs = np.unique(np.arange(len(pos))[:, None] * grid.size + owners8)
+        share = np.bincount(pairs % grid.size, minlength=grid.size) / len(pos)
+        per = two["timings"]["per_rank"]
+        y = np.mean([(r["coupling"] - x["coupling_exchange_seconds"]) / r["steps"]
+                     for r, x in zip(per, two["ranks"])])
+        s = share.mean()
+        if s < 1.0 - 1e-9:
+            cal["c_div"] = float(min(max((cal["C"] - y) / (1.0 - s), 0.0), cal["C"]))
+            cal["c_rep"] = cal["C"] - cal["c_div"]
+            cal["fit"] = (f"2 ranks: coupling less its exchanges {1e3 * y:.3f} ms/step per rank, "
+                          f"{100 * s:.0f} % of the particles touch a rank's subdomain")
+        # the lattice: busy per fluid node at 2 ranks against 1
+        fluid = ~two["solid"]
+        F_r = np.bincount(grid.owner_field()[fluid], minlength=grid.size)
+        lat = [(r["lb_fluid"] - x["halo_seconds"]) / r["steps"] for r, x in zip(per, two["ranks"])]
+        cal["lattice_check"] = float(np.mean([l / (cal["L"] * f / fluid.sum()) for l, f in zip(lat, F_r)]))
+    return cal
+
+
+# ------------------------------------------------------------------- main
+def main():
+    if len(sys.argv) > 3 and sys.argv[1] == "--child" and sys.argv[3] == "--":
+        child(sys.argv[2], sys.argv[4:])
+        return
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cells", type=int, nargs="+", default=[0, 5, 10, 20, 40, 60], help="numbers of RBCs")
+    ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2], help="MPI ranks to measure at")
+    ap.add_argument("--steps", type=int, default=500, help="MD steps per cycle")
+    ap.add_argument("--cycles", type=int, default=1, help="cycles of --steps (all are timed)")
+    ap.add_argument("--repeats", type=int, default=2, help="runs per configuration (the least counts)")
+    ap.add_argument("--threads", type=int, default=1, help="OMP_NUM_THREADS of the runs")
+    ap.add_argument("--tall-height", type=float, default=26.0,
+                    help="channel height for counts that do not fit at the paper's 20 (0: report them)")
+    ap.add_argument("--project", type=int, nargs="*", default=[0, 40, 60],
+                    help="cell counts to project (measured ones only)")
+    ap.add_argument("--project-ranks", type=int, nargs="+", default=[2, 8, 10, 64, 1024])
+    ap.add_argument("--seeds", type=int, default=3, help="random placements averaged in the model")
+    ap.add_argument("--mpirun", default="mpirun")
+    ap.add_argument("--pyoif", default=os.path.join(ROOT, "build", "pyoif"))
+    ap.add_argument("--csv", default="scaling.csv")
+    ap.add_argument("--model-csv", default="scaling_model.csv")
+    args = ap.parse_args()
+    if args.steps < 1 or args.repeats < 1 or args.cycles < 1 or min(args.ranks) < 1:
+        ap.error("--steps, --cycles, --repeats and --ranks must be at least 1")
+    ranks_list = sorted(set(args.ranks))
+    if 1 not in ranks_list:
+        ap.error("--ranks must include 1 (the reference of speed-up and model)")
+
+    # --- measure
+    load_before = os.getloadavg()
+    results = {}  # (cells, height) -> {ranks: data}
+    heights = {}  # cells -> height measured at
+    no_room = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        todo = [(n, FULL_HEIGHT) for n in sorted(set(args.cells))]
+        while todo:
+            n, h = todo.pop(0)
+            try:
+                for k in ranks_list:
+                    results.setdefault((n, h), {})[k] = measure(args, n, k, h, tmp)
+                    d = results[(n, h)][k]["report"]
+                    print(f"  measured {n:3d} RBCs, height {h:g}, {k} rank(s): "
+                          f"{1e3 * d['total'] / d['steps']:.2f} s / 1000 steps", flush=True)
+                if n not in heights or h == FULL_HEIGHT:
+                    heights[n] = h
+            except NoRoom as e:
+                results.pop((n, h), None)
+                if h == FULL_HEIGHT and args.tall_height > 0:
+                    print(f"  {n} RBCs do not fit the sample's seeding region at height {h:g}; "
+                          f"measuring at --height {args.tall_height:g}", flush=True)
+                    todo.append((n, args.tall_height))
+                    if (0, args.tall_height) not in results and all(m != (0, args.tall_height) for m in todo):
+                        todo.insert(0, (0, args.tall_height))
+                else:
+                    no_room[n] = str(e)
+
+    def per_step(d):
+        return d["report"]["total"] / d["report"]["steps"]
+
+    # --- measured table
+    print()
+    print("Measured: samples/cell_flow_in_bifurcation.py --full, "
+          f"{args.cycles} x {args.steps} steps, least of {args.repeats}, OMP_NUM_THREADS={args.threads}; "
+          f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after")
+    hdr = (f"{'RBCs':>6s} {'N':>6s} {'ranks':>5s} {'s/1000':>8s} {'s/cell':>7s} {'speedup':>7s} {'eff':>5s} "
+           f"{'balance':>7s} {'comm ms':>8s} {'halo kB':>8s} {'coupl kB':>8s}  decomposition")
+    print(hdr)
+    rows = []
+    for (n, h), by_k in sorted(results.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        base = results.get((0, h))
+        tag = f"{n}" + ("" if h == FULL_HEIGHT else f" h{h:g}")
+        for k in ranks_list:
+            d = by_k[k]
+            t = per_step(d)
+            t1 = per_step(by_k[1])
+            N = d["n_particles"]
+            per_cell = (t - per_step(base[k])) / n if (n and base and k in base) else None
+            rep = d["report"]
+            comm = rep.get("communication", 0.0) / rep["steps"] if k > 1 else 0.0
+            bal = rep.get("balance", 1.0) if k > 1 else 1.0
+            halo = max(r["halo_bytes"] for r in d["ranks"]) if k > 1 else 0
+            coupl = 24.0 * N * (k - 1) / k
+            dec = d["ranks"][0]["decomposition"]
+            print(f"{tag:>6s} {N:6d} {k:5d} {1e3 * t:8.2f} "
+                  + (f"{1e3 * per_cell:7.3f} " if per_cell is not None else f"{'-':>7s} ")
+                  + f"{t1 / t:7.2f} {100 * t1 / (k * t):4.0f}% {bal:7.3f} {1e3 * comm:8.3f} "
+                  f"{halo / 1e3:8.1f} {coupl / 1e3:8.1f}  {dec}")
+            rows.append({"rbcs": n, "height": h, "particles": N, "ranks": k, "s_per_1000_steps": 1e3 * t,
+                         "s_per_cell_per_1000_steps": "" if per_cell is None else 1e3 * per_cell,
+                         "speedup": t1 / t, "efficiency": t1 / (k * t), "load_balance": bal,
+                         "communication_ms_per_step": 1e3 * comm,
+                         "halo_ms_per_step": 1e3 * max(r["halo_seconds"] for r in d["ranks"]) / rep["steps"],
+                         "coupling_exchange_ms_per_step": 1e3 * max(r["coupling_exchange_seconds"]
+                                                                    for r in d["ranks"]) / rep["steps"],
+                         "halo_bytes_per_update": halo,
+                         "coupling_bytes_per_step": coupl, "lattice_share": d["timings"]["lb_fluid"] /
+                         d["timings"]["total"], "decomposition": dec,
+                         "paper_one_core_s": PAPER[1].get(n, ""),
+                         "paper_ten_cores_s": PAPER[10].get(n, "")})
+    for n, why in no_room.items():
+        print(f"{n:6d} RBCs: does not fit the sample's seeding region ({why})")
+    print("  s/cell: (t(n) - t(0)) / n per 1000 steps (same height); comm: halo + coupling exchanges "
+          "per step, waiting included (largest rank); halo kB: sent per lattice update by the busiest rank; "
+          "coupl kB: received per MD step per rank, 24 N (K-1)/K")
+    print("  paper (Table 1, CPU s / 1000 steps, 1 core / 10 cores): "
+          + ", ".join(f"{n}: {PAPER[1][n]:.2f} / {PAPER[10][n]:.2f}" for n in sorted(PAPER[1])))
+    write_rows(args.csv, rows)
+
+    # --- model
+    projected = [n for n in args.project if n in heights]
+    for n in args.project:
+        if n not in heights:
+            print(f"(no projection for {n} RBCs: not measured)")
+    if not projected:
+        return
+    cell_meshes = meshes()
+    print()
+    print(f"Model (alpha {ALPHA * 1e6:.1f} us per message, beta {BETA / 1e9:.0f} GB/s; calibrated on the "
+          "1-rank run of each count, the coupling's split on the 2-rank run)")
+    model_rows = []
+    for n in projected:
+        h = heights[n]
+        by_k = results[(n, h)]
+        cal = calibrate(by_k[1], by_k.get(2))
+        print(f"  {n} RBCs{'' if h == FULL_HEIGHT else f' (height {h:g})'}: per step L {1e3 * cal['L']:.3f} "
+              f"ms, C {1e3 * cal['C']:.3f} (c_rep {1e3 * cal['c_rep']:.3f}, c_div {1e3 * cal['c_div']:.3f}), "
+              f"M {1e3 * cal['M']:.3f}, O {1e3 * cal['O']:.3f}; measured total {1e3 * per_step(by_k[1]):.3f} ms; "
+              f"{cal['fit']}"
+              + (f"; lattice busy per fluid node at 2 ranks / 1 rank: {cal['lattice_check']:.2f}"
+                 if "lattice_check" in cal else ""))
+        solid = by_k[1]["solid"]
+        nodes = solid.shape
+        box = np.array(nodes, dtype=float)
+        fluid = ~solid
+        # placements: the fixed scene, and two copies side by side for weak scaling
+        scenes, weak_loads = [], []
+        solid2 = np.concatenate([solid, solid], axis=0)
+        grid2 = Grid((2, 1, 1), [[0, nodes[0], 2 * nodes[0]], [0, nodes[1]], [0, nodes[2]]], solid2.shape)
+        for seed in range(args.seeds):
+            rng = np.random.default_rng(seed)
+            scene = random_scene(box, n, rng, cell_meshes)
+            other = random_scene(box, n, rng, cell_meshes)
+            scenes.append(scene)
+            weak_loads.append(rank_loads(grid2, solid2, (np.concatenate([scene[0], other[0] + [box[0], 0, 0]]),
+                                                         np.concatenate([scene[1], other[1] + len(scene[2])]),
+                                                         np.concatenate([scene[2], other[2]]))))
+        rows_n = []
+        for P in sorted({1} | set(args.project_ranks)):
+            dims = choose_dims(P, nodes)
+            grid = Grid(dims, balanced_cuts(dims, fluid), nodes)
+            acc = {k: [] for k in ("today", "planned", "weak_today", "weak_planned")}
+            for scene, loads2 in zip(scenes, weak_loads):
+                loads = rank_loads(grid, solid, scene)
+                acc["today"].append(step_time(cal, loads, "today", P))
+                acc["planned"].append(step_time(cal, loads, "planned", P))
+                acc["weak_today"].append(step_time(cal, loads2, "today", P, weak=True))
+                acc["weak_planned"].append(step_time(cal, loads2, "planned", P, weak=True))
+            row = {"rbcs": n, "height": h, "ranks": P, "grid": "x".join(map(str, dims))}
+            for k, v in acc.items():
+                busy, comm = np.mean(v, axis=0)
+                row[f"{k}_s_per_1000"] = 1e3 * (busy + comm)
+                row[f"{k}_comm_share"] = comm / (busy + comm)
+            if P in by_k:
+                row["measured_s_per_1000"] = 1e3 * per_step(by_k[P])
+            rows_n.append(row)
+        ref = rows_n[0]  # one rank: the same scene for strong and weak scaling
+        for row in rows_n:
+            P = row["ranks"]
+            for k in ("today", "planned"):
+                row[f"{k}_strong_efficiency"] = ref[f"{k}_s_per_1000"] / (P * row[f"{k}_s_per_1000"])
+                row[f"{k}_weak_efficiency"] = ref[f"{k}_s_per_1000"] / row[f"weak_{k}_s_per_1000"]
+        model_rows += rows_n
+
+    print()
+    print("Projected (strong: t1/(P tP), the fixed scene; weak: t1/tP, one copy of the scene per rank; "
+          "s/1000: seconds per 1000 steps of the fixed scene, comm: its communication share)")
+    print(f"{'RBCs':>6s} {'ranks':>5s} {'grid':>8s} | {'measured':>8s} | {'today':>8s} {'comm':>5s} {'strong':>6s} "
+          f"{'weak':>6s} | {'planned':>8s} {'comm':>5s} {'strong':>6s} {'weak':>6s} | paper (Table 1)")
+    for row in model_rows:
+        n, P = row["rbcs"], row["ranks"]
+        paper = ""
+        if P > 1 and P in PAPER and n in PAPER[P]:
+            paper = f"{PAPER[1][n]:.2f} / ({P} x {PAPER[P][n]:.2f}) = {100 * PAPER[1][n] / (P * PAPER[P][n]):.0f} %"
+        tag = f"{n}" + ("" if row["height"] == FULL_HEIGHT else f" h{row['height']:g}")
+        meas = f"{row['measured_s_per_1000']:8.3f}" if "measured_s_per_1000" in row else f"{'':8s}"
+        print(f"{tag:>6s} {P:5d} {row['grid']:>8s} | {meas} | {row['today_s_per_1000']:8.3f} "
+              f"{100 * row['today_comm_share']:4.0f}% {100 * row['today_strong_efficiency']:5.0f}% "
+              f"{100 * row['today_weak_efficiency']:5.0f}% | {row['planned_s_per_1000']:8.3f} "
+              f"{100 * row['planned_comm_share']:4.0f}% {100 * row['planned_strong_efficiency']:5.0f}% "
+              f"{100 * row['planned_weak_efficiency']:5.0f}% | {paper}")
+    print("  paper's Table 1 efficiency t1/(P tP) at 3 / 5 / 6 / 10 cores: "
+          + "; ".join(f"{n} cells " + " / ".join(f"{100 * PAPER[1][n] / (P * PAPER[P][n]):.0f}"
+                                                 for P in (3, 5, 6, 10)) + " %" for n in sorted(PAPER[1])))
+    write_rows(args.model_csv, model_rows)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,334 @@
+// The particles over the ranks of a decomposed lattice (System::particles_spread):
+// owners, the copies other ranks keep current, agreement on errors.
+//
+// Every rank stores every particle at the same local index (they are added
+// and removed on all ranks alike by the SPMD script), so no index ever needs
+// translating; what is spread is the work. The owner of a particle
+// integrates it and computes its forces (membrane, bonds, contacts, walls,
+// Langevin); the coupling is computed where the lattice is and its force
+// sent to the owner. A rank that needs another rank's particle (its coupling
+// stencil reaches the rank's subdomain, a pair contact or a bond with one of
+// its particles) gets its position and velocity every step, and its normal
+// after the membrane phase. At every re-sort of the cell system all copies
+// are made current (one allgather of each rank's particles), and the owners
+// and lists are derived from that state by every rank alike, so no rank has
+// to tell another what it needs.
+#include "system/system.hpp"
+
+#include "utils/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <unordered_map>
+
+namespace pyoif {
+
+void System::update_spread() {
+  const bool spread = m_lb && m_lb->distributed();
+  if (spread == m_spread.active)
+    return;
+  if (m_spread.active)
+    synchronize(); // every copy current before the ranks go separate ways no more
+  m_spread = Spread{};
+  m_spread.active = spread;
+  if (spread)
+    m_spread.comm = Communicator(m_lb->domain().comm());
+  cells.invalidate();
+  membranes.invalidate();
+  invalidate_forces();
+}
+
+void System::synchronize() {
+  if (!m_spread.active || !m_spread.stale)
+    return;
+  if (owned_mask()) // (particles added or removed since: all copies current)
+    gather_all_particles();
+  m_spread.stale = false;
+}
+
+void System::gather_all_particles() {
+  // 15 numbers per particle: position, image, velocity, force, normal, in
+  // local-index order from each owner; particles without an owner (added
+  // since) are current everywhere already
+  constexpr int per = 15;
+  const int size = m_spread.comm.size(), me = m_spread.comm.rank();
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  m_spread.owner.resize(n, -1);
+  std::vector<int> counts(size, 0), displs(size, 0);
+  std::vector<double> mine;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int o = m_spread.owner[i];
+    if (o < 0)
+      continue;
+    counts[o] += per;
+    if (o == me) {
+      const Vec3 img = p.image[i].cast<double>();
+      const Vec3* fields[5] = {&p.pos[i], &img, &p.vel[i], &p.force[i], &p.normal[i]};
+      for (const Vec3* v : fields)
+        mine.insert(mine.end(), {(*v)[0], (*v)[1], (*v)[2]});
+    }
+  }
+  for (int r = 1; r < size; ++r)
+    displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<double> all(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(),
+                 displs.data(), MPI_DOUBLE, m_spread.comm.comm());
+  for (std::size_t i = 0; i < n; ++i) {
+    const int o = m_spread.owner[i];
+    if (o < 0)
+      continue;
+    const double* v = all.data() + displs[o];
+    displs[o] += per;
+    p.pos[i] = Vec3(v[0], v[1], v[2]);
+    p.image[i] = Vec3i(static_cast<int>(v[3]), static_cast<int>(v[4]), static_cast<int>(v[5]));
+    p.vel[i] = Vec3(v[6], v[7], v[8]);
+    p.force[i] = Vec3(v[9], v[10], v[11]);
+    p.normal[i] = Vec3(v[12], v[13], v[14]);
+  }
+}
+
+void System::assign_owners() {
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  const DomainGrid& grid = m_lb->domain();
+  const int me = m_spread.comm.rank();
+  const double agrid = m_lb->agrid();
+  const Vec3i nodes = m_lb->grid();
+  auto node_of = [&](const Vec3& x) {
+    Vec3i g;
+    for (int d = 0; d < 3; ++d) {
+      g[d] = static_cast<int>(std::floor(box.folded(x)[d] / agrid));
+      g[d] = std::min(std::max(g[d], 0), nodes[d] - 1);
+    }
+    return g;
+  };
+  // a membrane cell's nodes go with the first node of its first bond (the
+  // cells are keyed by the mol_id of a bond's first particle)
+  std::unordered_map<int, int> first_node_of_mol;
+  for (const BondedEntry& entry : bonded)
+    std::visit(
+        [&](const auto& ia) {
+          using IA = std::decay_t<decltype(ia)>;
+          if constexpr (is_membrane_bond<IA>)
+            for (std::size_t b = 0; b < entry.bonds.size(); ++b) {
+              const int i = p.index(entry.bonds.bond(b)[0]);
+              if (i >= 0)
+                first_node_of_mol.try_emplace(p.mol_id[i], i);
+            }
+        },
+        entry.interaction);
+  const std::vector<std::uint8_t> owned_before = m_spread.owned;
+  m_spread.owner.assign(n, 0);
+  m_spread.owned.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto it = first_node_of_mol.find(p.mol_id[i]);
+    const std::size_t ref =
+        it != first_node_of_mol.end() ? static_cast<std::size_t>(it->second) : i;
+    m_spread.owner[i] = grid.owner_of(node_of(p.pos[ref]));
+    m_spread.owned[i] = m_spread.owner[i] == me;
+  }
+  // who needs whom: need[r] the particles of other ranks that rank r keeps
+  // current; only the lists this rank sends and receives are kept
+  std::unordered_map<int, std::set<int>> send, recv;
+  auto needs = [&](int rank, int i) {
+    const int o = m_spread.owner[i];
+    if (o == rank)
+      return;
+    if (rank == me)
+      recv[o].insert(i);
+    else if (o == me)
+      send[rank].insert(i);
+  };
+  // (1) coupling: the ranks whose subdomain the stencil can reach before
+  // the next re-sort (a particle moves at most skin / 2 until then)
+  const double reach = 0.5 * cells.skin;
+  const auto& cuts = grid.cuts();
+  for (std::size_t i = 0; i < n; ++i) {
+    std::array<std::vector<int>, 3> coords;
+    for (int d = 0; d < 3; ++d) {
+      const int lo = static_cast<int>(std::floor((p.pos[i][d] - reach) / agrid - 0.5));
+      const int hi = static_cast<int>(std::floor((p.pos[i][d] + reach) / agrid - 0.5)) + 1;
+      for (int g = lo; g <= hi; ++g) {
+        const int w = ((g % nodes[d]) + nodes[d]) % nodes[d];
+        const int c = static_cast<int>(std::upper_bound(cuts[d].begin(), cuts[d].end(), w) -
+                                       cuts[d].begin()) -
+                      1;
+        if (std::find(coords[d].begin(), coords[d].end(), c) == coords[d].end())
+          coords[d].push_back(c);
+      }
+    }
+    for (const int cx : coords[0])
+      for (const int cy : coords[1])
+        for (const int cz : coords[2])
+          needs(grid.rank_of(Vec3i(cx, cy, cz)), static_cast<int>(i));
+  }
+  // (2) pair contacts (the pair list, built from the current state, holds
+  // every pair within range + skin until the next re-sort)
+  for (const auto& pair : cells.pairs()) {
+    const int a = pair[0], b = p.owner(static_cast<std::size_t>(pair[1]));
+    needs(m_spread.owner[a], b);
+    needs(m_spread.owner[b], a);
+  }
+  // (3) bonds between particles of different owners (each owner evaluates
+  // the bond for its own particles)
+  for (const BondedEntry& entry : bonded) {
+    const BondGroup& g = entry.bonds;
+    for (std::size_t b = 0; b < g.size(); ++b) {
+      const int* ids = g.bond(b);
+      for (int k = 0; k < g.n_particles; ++k)
+        for (int l = 0; l < g.n_particles; ++l) {
+          const int ik = p.index(ids[k]), il = p.index(ids[l]);
+          if (k != l && ik >= 0 && il >= 0)
+            needs(m_spread.owner[ik], il);
+        }
+    }
+  }
+  m_spread.peers.clear();
+  std::set<int> ranks;
+  for (const auto& [r, list] : send)
+    ranks.insert(r);
+  for (const auto& [r, list] : recv)
+    ranks.insert(r);
+  m_spread.current = m_spread.owned;
+  for (const int r : ranks) {
+    Spread::Peer peer{r, {}, {}, {}, {}};
+    if (send.count(r))
+      peer.send.assign(send[r].begin(), send[r].end());
+    if (recv.count(r))
+      peer.recv.assign(recv[r].begin(), recv[r].end());
+    for (const int i : peer.recv)
+      m_spread.current[i] = 1;
+    m_spread.peers.push_back(std::move(peer));
+  }
+  // the membranes compile this rank's cells anew only when they changed
+  if (m_spread.owned != owned_before)
+    ++m_spread.version;
+  m_spread.layout = p.layout_version;
+  m_spread.mol = p.mol_version;
+  m_spread.bonds = m_bonds_version;
+  m_spread.cuts = grid.cuts();
+}
+
+void System::exchange_current(bool normals) {
+  auto& p = particles;
+  const int per = normals ? 3 : 6;
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * m_spread.peers.size());
+  for (auto& peer : m_spread.peers) {
+    peer.recv_buffer.resize(per * peer.recv.size());
+    requests.emplace_back();
+    MPI_Irecv(peer.recv_buffer.data(), static_cast<int>(peer.recv_buffer.size()), MPI_DOUBLE,
+              peer.rank, 81, m_spread.comm.comm(), &requests.back());
+  }
+  for (auto& peer : m_spread.peers) {
+    peer.send_buffer.clear();
+    for (const int i : peer.send) {
+      if (normals) {
+        peer.send_buffer.insert(peer.send_buffer.end(),
+                                {p.normal[i][0], p.normal[i][1], p.normal[i][2]});
+      } else {
+        peer.send_buffer.insert(peer.send_buffer.end(), {p.pos[i][0], p.pos[i][1], p.pos[i][2],
+                                                         p.vel[i][0], p.vel[i][1], p.vel[i][2]});
+      }
+    }
+    requests.emplace_back();
+    MPI_Isend(peer.send_buffer.data(), static_cast<int>(peer.send_buffer.size()), MPI_DOUBLE,
+              peer.rank, 81, m_spread.comm.comm(), &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (auto& peer : m_spread.peers)
+    for (std::size_t k = 0; k < peer.recv.size(); ++k) {
+      const double* v = peer.recv_buffer.data() + per * k;
+      const int i = peer.recv[k];
+      if (normals) {
+        p.normal[i] = Vec3(v[0], v[1], v[2]);
+      } else {
+        p.pos[i] = Vec3(v[0], v[1], v[2]);
+        p.vel[i] = Vec3(v[3], v[4], v[5]);
+      }
+    }
+}
+
+void System::share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver) {
+  // Each rank sends, for every particle of the peer that it keeps current,
+  // the force it computed (zero where it did not); the owner takes the value
+  // of the particle's giver: a copy, no sum. Fixed sizes (the lists), so a
+  // rank whose computation failed still sends its share.
+  const int me = m_spread.comm.rank();
+  std::vector<MPI_Request> requests;
+  for (auto& peer : m_spread.peers) {
+    peer.recv_buffer.resize(3 * peer.send.size());
+    requests.emplace_back();
+    MPI_Irecv(peer.recv_buffer.data(), static_cast<int>(peer.recv_buffer.size()), MPI_DOUBLE,
+              peer.rank, 82, m_spread.comm.comm(), &requests.back());
+  }
+  for (auto& peer : m_spread.peers) {
+    peer.send_buffer.clear();
+    for (const int i : peer.recv)
+      peer.send_buffer.insert(peer.send_buffer.end(), {force[i][0], force[i][1], force[i][2]});
+    requests.emplace_back();
+    MPI_Isend(peer.send_buffer.data(), static_cast<int>(peer.send_buffer.size()), MPI_DOUBLE,
+              peer.rank, 82, m_spread.comm.comm(), &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  const std::vector<std::uint8_t>& owned = m_spread.owned;
+  for (std::size_t i = 0; i < force.size(); ++i)
+    if (!owned[i] || giver[i] != me)
+      force[i].setZero();
+  for (auto& peer : m_spread.peers)
+    for (std::size_t k = 0; k < peer.send.size(); ++k) {
+      const int i = peer.send[k];
+      if (giver[i] == peer.rank)
+        force[i] =
+            Vec3(peer.recv_buffer[3 * k], peer.recv_buffer[3 * k + 1], peer.recv_buffer[3 * k + 2]);
+    }
+}
+
+int System::agree(int code) const {
+  if (!m_spread.active)
+    return code;
+  MPI_Allreduce(MPI_IN_PLACE, &code, 1, MPI_INT, MPI_MAX, m_spread.comm.comm());
+  return code;
+}
+
+void System::raise_agreed(const std::exception_ptr& local) const {
+  if (!m_spread.active) {
+    if (local)
+      std::rethrow_exception(local);
+    return;
+  }
+  int failing = local ? m_spread.comm.rank() : m_spread.comm.size();
+  MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_spread.comm.comm());
+  if (failing == m_spread.comm.size())
+    return;
+  // the lowest failing rank's message and kind, raised on every rank
+  std::string message;
+  int kind = 0; // 0 SimulationInstability, 1 InputError, 2 other
+  if (failing == m_spread.comm.rank()) {
+    try {
+      std::rethrow_exception(local);
+    } catch (const SimulationInstability& e) {
+      message = e.what();
+    } catch (const InputError& e) {
+      message = e.what();
+      kind = 1;
+    } catch (const std::exception& e) {
+      message = e.what();
+      kind = 2;
+    }
+  }
+  int length = static_cast<int>(message.size());
+  MPI_Bcast(&kind, 1, MPI_INT, failing, m_spread.comm.comm());
+  MPI_Bcast(&length, 1, MPI_INT, failing, m_spread.comm.comm());
+  message.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(message.data(), length, MPI_CHAR, failing, m_spread.comm.comm());
+  if (kind == 0)
+    throw SimulationInstability(message);
+  if (kind == 1)
+    throw InputError(message);
+  throw std::runtime_error(message);
+}
+
+} // namespace pyoif
