@@ -116,6 +116,9 @@ PAPER = {1: {0: 48.14, 5: 55.90, 10: 62.68, 20: 84.37, 40: 145.00, 60: 242.47},
          6: {0: 11.02, 5: 14.82, 10: 15.98, 20: 22.90, 40: 36.04, 60: 53.31},
          10: {0: 8.31, 5: 11.61, 10: 13.96, 20: 18.31, 40: 26.67, 60: 40.22}}
 
+# the designs the model projects (module docstring)
+DESIGNS = ("replicated", "spread", "owned")
+
 # D3Q19 velocities less the rest one
 D3Q19 = [c for c in ((x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1))
          if 0 < sum(map(abs, c)) <= 2]
@@ -137,11 +140,13 @@ def child(json_path, argv):
                                 coupling_exchange_seconds=float(core.coupling_exchange_seconds),
                                 decomposition=str(core.decomposition)))
     mask = np.asarray(lbf[:, :, :].boundary) != 0  # collective
-    pos = np.asarray(system.part.all().pos, dtype=float)
+    everyone = system.part.all()
+    pos, mol = np.asarray(everyone.pos, dtype=float), np.asarray(everyone.mol_id, dtype=int)
     if comm.Get_rank() == 0:
-        np.savez(json_path + ".npz", solid=mask, pos=pos)
+        np.savez(json_path + ".npz", solid=mask, pos=pos, mol=mol)
         with open(json_path, "w") as f:
-            json.dump(dict(timings=t, ranks=ranks, n_particles=len(pos), box=list(system.box_l)), f)
+            json.dump(dict(timings=t, ranks=ranks, n_particles=len(pos), box=list(system.box_l),
+                           rebuilds=int(system.cell_system.n_rebuilds)), f)
 
 
 # ----------------------------------------------------------- measurement
@@ -191,7 +196,7 @@ def run_once(args, cells, ranks, height, tmp):
     with open(js) as f:
         data = json.load(f)
     with np.load(js + ".npz") as z:
-        data["solid"], data["pos"] = z["solid"], z["pos"]
+        data["solid"], data["pos"], data["mol"] = z["solid"], z["pos"], z["mol"]
     data["report"] = rep
     return data
 
@@ -200,6 +205,23 @@ def measure(args, cells, ranks, height, tmp):
     """The quietest of --repeats runs (least time per step)."""
     runs = [run_once(args, cells, ranks, height, tmp) for _ in range(args.repeats)]
     return min(runs, key=lambda d: d["report"]["total"] / d["report"]["steps"])
+
+
+def engine(pyoif):
+    """The commit of the tree, whether src/ differs from it, and the time of
+    the engine's build (to tell whether it changed during the measurement)."""
+    import glob
+    import time
+    so = sorted(glob.glob(os.path.join(os.path.dirname(os.path.abspath(pyoif)), "python", "lbmd", "_lbmd*.so")))
+    built = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(os.path.getmtime(so[0]))) if so else "?"
+    try:
+        head = subprocess.run(["git", "-C", ROOT, "log", "-1", "--format=%h"], stdout=subprocess.PIPE,
+                              stderr=subprocess.DEVNULL, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--", "src"], stdout=subprocess.PIPE,
+                               stderr=subprocess.DEVNULL, text=True).stdout.strip()
+    except OSError:
+        head, dirty = "?", ""
+    return f"tree at {head or '?'}{' (src/ changed since)' if dirty else ''}, engine built {built}"
 
 
 # ------------------------------------------------------------------ model
@@ -322,29 +344,30 @@ def rank_loads(grid, solid, scene):
     node = np.floor(pos).astype(int)
     held = grid.owner_of_nodes(node[:, 0], node[:, 1], node[:, 2])
     N_r = np.bincount(held, minlength=P)
-    lo = np.floor(pos - 0.5).astype(int)
-    owners8 = np.stack([grid.owner_of_nodes(lo[:, 0] + a, lo[:, 1] + b, lo[:, 2] + c)
-                        for a in (0, 1) for b in (0, 1) for c in (0, 1)], axis=1)
-    pairs = np.unique(np.arange(N)[:, None] * P + owners8)
-    S_r = np.bincount(pairs % P, minlength=P)
-    ghosts = np.zeros(P)
+    S_r = np.bincount(stencil_ranks(grid, pos) % P, minlength=P)
+    first = np.searchsorted(cell_of, np.arange(len(cell_nodes)))  # each cell's first node
+    evaluator = held[first]
+    cell_owner = evaluator[cell_of]  # the spread engine's owner of each particle
+    V_r = np.bincount(evaluator, weights=cell_nodes, minlength=P)
+    ghosts, copies_in, copies_out = np.zeros(P), np.zeros(P), np.zeros(P)
     for r in range(P):
-        inside = np.ones(N, dtype=bool)
+        near = np.ones(N, dtype=bool)  # in the subdomain or within GHOST_RANGE of it
         for d in range(3):
             if grid.dims[d] == 1:
                 continue
             x = (pos[:, d] - grid.lower(r)[d]) % L[d]
-            inside &= (x < grid.extent(r)[d] + GHOST_RANGE) | (x > L[d] - GHOST_RANGE)
-        ghosts[r] = np.count_nonzero(inside & (held != r))
-    first = np.searchsorted(cell_of, np.arange(len(cell_nodes)))  # each cell's first node
-    evaluator = held[first]
-    V_r = np.bincount(evaluator, weights=cell_nodes, minlength=P)
+            near &= (x < grid.extent(r)[d] + GHOST_RANGE) | (x > L[d] - GHOST_RANGE)
+        ghosts[r] = np.count_nonzero(near & (held != r))
+        wanted = near & (cell_owner != r)
+        copies_in[r] = np.count_nonzero(wanted)
+        copies_out += np.bincount(cell_owner[wanted], minlength=P)
     b_bytes = np.zeros(P)
     remote = held != evaluator[cell_of]
     np.add.at(b_bytes, evaluator[cell_of[remote]], 72.0)
     np.add.at(b_bytes, held[remote], 72.0)
     return dict(F_r=F_r, halo=halo, vel=vel, peers=peers, S_r=S_r, N_r=N_r, ghosts=ghosts, V_r=V_r,
-                b_bytes=b_bytes, F=fluid.sum(), N=N, V=float(np.sum(cell_nodes)))
+                b_bytes=b_bytes, copies=np.maximum(copies_in, copies_out), F=fluid.sum(), N=N,
+                V=float(np.sum(cell_nodes)))
 
 
 def random_scene(box, n_rbc, rng, meshes):
@@ -370,7 +393,7 @@ def meshes():
 
 def step_time(cal, loads, design, P, weak=False):
     """(busy, comm) seconds per step on the busiest rank, model of the module
-    docstring. cal: per-step seconds L, c_rep, c_div, M, O."""
+    docstring. cal: per-step seconds L, c_rep, c_div, M, O, rebuilds per step."""
     L, c_rep, c_div, M, O = (cal[k] for k in ("L", "c_rep", "c_div", "M", "O"))
     F, N, V = loads["F"], loads["N"], loads["V"]
     if weak:  # one copy per rank: the 2-copy model's rank 0, copies P-fold
@@ -381,50 +404,112 @@ def step_time(cal, loads, design, P, weak=False):
         pick = slice(None)
         peers = loads["peers"][pick].max() if P > 1 else 0
     Fr, Sr, Nr, Vr = (loads[k][pick] for k in ("F_r", "S_r", "N_r", "V_r"))
+    copies = P if weak else 1  # scene copies: particles on every rank where storage is replicated
+    n_all = N * copies
+    log_p = math.ceil(math.log2(P)) if P > 1 else 0
     halo = loads["halo"][pick].max() if P > 1 else 0.0
     vel = loads["vel"][pick].max() if P > 1 else 0.0
-    neighbour = (2 * peers * ALPHA + (halo + vel) / BETA) if P > 1 else 0.0
-    if design == "today":
-        copies = P if weak else 1  # every rank holds every copy's particles
+    rounds = lambda k: k * peers * ALPHA  # k rounds of neighbour messages
+    lattice = (rounds(2) + (halo + vel) / BETA) if P > 1 else 0.0
+    if design == "replicated":
         busy = (L * Fr / F + c_rep * copies + c_div * np.minimum(Sr / N, 1.0) + (M + O) * copies).max()
-        n_all = N * copies
-        gather = (math.ceil(math.log2(P)) * ALPHA + 24.0 * n_all * (P - 1) / P / BETA) if P > 1 else 0.0
-        return busy, neighbour + gather
+        gather = (log_p * ALPHA + 24.0 * n_all * (P - 1) / P / BETA) if P > 1 else 0.0
+        return busy, lattice + gather
+    if design == "spread":
+        busy = (L * Fr / F + (c_rep + c_div) * np.minimum(Sr / N, 1.0) + (M + O) * Vr / V).max()
+        if P == 1:
+            return busy, 0.0
+        p2p = rounds(3) + 96.0 * loads["copies"][pick].max() / BETA
+        collectives = 2 * 2 * log_p * ALPHA
+        resort = cal["rebuilds"] * (log_p * ALPHA + 120.0 * n_all * (P - 1) / P / BETA)
+        return busy, lattice + p2p + collectives + resort
     busy = (L * Fr / F + (c_rep + c_div) * np.minimum(Sr / N, 1.0) + M * Vr / V + O * Nr / N).max()
     if P == 1:
         return busy, 0.0
-    ghosts = 2 * peers * ALPHA + 48.0 * loads["ghosts"][pick].max() / BETA
-    cells = peers * ALPHA + loads["b_bytes"][pick].max() / BETA
-    return busy, neighbour + ghosts + cells
+    ghosts = rounds(2) + 48.0 * loads["ghosts"][pick].max() / BETA
+    cells = rounds(1) + loads["b_bytes"][pick].max() / BETA
+    return busy, lattice + ghosts + cells
 
 
-def calibrate(one, two):
-    """Per-step seconds of the 1-rank run's phases, and the coupling's
-    replicated part fitted to the 2-rank run."""
+def spreads(run, one):
+    """Whether the engine of a run at K > 1 ranks spreads the particles' work
+    (each cell's membrane computed by one rank) rather than replicating it:
+    the mean membrane time per rank against the 1-rank run."""
+    per = run["timings"].get("per_rank")
+    if not per:
+        return False
+    m1 = one["timings"]["membrane"] / one["timings"]["steps"]
+    share = np.mean([r["membrane"] / r["steps"] for r in per]) / max(m1, 1e-30)
+    return share < 0.5 * (1.0 + 1.0 / len(per))
+
+
+def stencil_ranks(grid, pos):
+    """(particle, rank) pairs, as particle * P + rank: the ranks whose
+    subdomain a particle's interpolation stencil touches."""
+    lo = np.floor(pos - 0.5).astype(int)
+    owners8 = np.stack([grid.owner_of_nodes(lo[:, 0] + a, lo[:, 1] + b, lo[:, 2] + c)
+                        for a in (0, 1) for b in (0, 1) for c in (0, 1)], axis=1)
+    return np.unique(np.arange(len(pos))[:, None] * grid.size + owners8)
+
+
+def coupling_bytes(run, spread):
+    """Bytes of the coupling's force exchange a rank receives per MD step: the
+    allgather of every particle's force (replicated work), or the forces of
+    the particles whose stencil reaches another rank than their owner, the
+    rank of their cell's first node (spread work; the busiest rank)."""
+    K, N = len(run["ranks"]), run["n_particles"]
+    if K == 1:
+        return 0.0
+    if not spread:
+        return 24.0 * N * (K - 1) / K
+    nodes = np.array(run["solid"].shape)
+    grid = Grid(*parse_decomposition(run["ranks"][0]["decomposition"], nodes), nodes)
+    pos, mol = run["pos"], run["mol"]
+    node = np.floor(pos).astype(int)
+    held = grid.owner_of_nodes(node[:, 0], node[:, 1], node[:, 2])
+    mols, first = np.unique(mol, return_index=True)
+    owner = held[first][np.searchsorted(mols, mol)]
+    pairs = stencil_ranks(grid, pos)
+    elsewhere = pairs[(pairs % K) != owner[pairs // K]]
+    return 24.0 * np.bincount(elsewhere % K, minlength=K).max()
+
+
+def calibrate(one, two, stencil_share):
+    """Per-step seconds of the 1-rank run's phases; the coupling's replicated
+    part fitted to the 2-rank run where that engine replicates the particle
+    work, else stencil_share of it; re-sorts per step."""
     t = one["timings"]
     steps = t["steps"]
     cal = dict(L=t["lb_fluid"] / steps, C=t["coupling"] / steps, M=t["membrane"] / steps,
-               O=(t["bonded"] + t["non_bonded"] + t["constraints"] + t["other"]) / steps)
-    cal["c_rep"], cal["c_div"], cal["fit"] = 0.0, cal["C"], "no 2-rank run: all of C divisible"
+               O=(t["bonded"] + t["non_bonded"] + t["constraints"] + t["other"]) / steps,
+               rebuilds=max(one.get("rebuilds", 1) - 1, 0) / steps)  # less the build of the set-up
+    cal["c_rep"] = stencil_share * cal["C"]
+    cal["c_div"] = cal["C"] - cal["c_rep"]
+    cal["fit"] = f"no 2-rank run: {100 * stencil_share:.0f} % of C replicated (--stencil-share)"
+    cal["engine"] = "?"
     if two is not None:
+        # does the measured engine replicate the particles' work? (every rank
+        # computes every membrane, or each cell's owner only)
+        per = two["timings"]["per_rank"]
+        m_share = np.mean([r["membrane"] / r["steps"] for r in per]) / max(cal["M"], 1e-30)
+        cal["engine"] = "spread" if spreads(two, one) else "replicated"
         nodes = np.array(two["solid"].shape)
         dims, cuts = parse_decomposition(two["ranks"][0]["decomposition"], nodes)
         grid = Grid(dims, cuts, nodes)
-        pos = two["pos"]
-        lo = np.floor(pos - 0.5).astype(int)
-        owners8 = np.stack([grid.owner_of_nodes(lo[:, 0] + a, lo[:, 1] + b, lo[:, 2] + c)
-                            for a in (0, 1) for b in (0, 1) for c in (0, 1)], axis=1)
-        pairs = np.unique(np.arange(len(pos))[:, None] * grid.size + owners8)
-        share = np.bincount(pairs % grid.size, minlength=grid.size) / len(pos)
-        per = two["timings"]["per_rank"]
+        pairs = stencil_ranks(grid, two["pos"])
+        share = np.bincount(pairs % grid.size, minlength=grid.size) / len(two["pos"])
         y = np.mean([(r["coupling"] - x["coupling_exchange_seconds"]) / r["steps"]
                      for r, x in zip(per, two["ranks"])])
         s = share.mean()
-        if s < 1.0 - 1e-9:
+        cal["fit"] = (f"the measured engine spreads the particles' work (membrane per rank at 2 ranks "
+                      f"{100 * m_share:.0f} % of 1 rank): {100 * stencil_share:.0f} % of C replicated "
+                      f"(--stencil-share)")
+        if cal["engine"] == "replicated" and s < 1.0 - 1e-9:
             cal["c_div"] = float(min(max((cal["C"] - y) / (1.0 - s), 0.0), cal["C"]))
             cal["c_rep"] = cal["C"] - cal["c_div"]
-            cal["fit"] = (f"2 ranks: coupling less its exchanges {1e3 * y:.3f} ms/step per rank, "
-                          f"{100 * s:.0f} % of the particles touch a rank's subdomain")
+            cal["fit"] = (f"the measured engine replicates the particles' work; 2 ranks: coupling less its "
+                          f"exchanges {1e3 * y:.3f} ms/step per rank, {100 * s:.0f} % of the particles touch "
+                          f"a rank's subdomain")
         # the lattice: busy per fluid node at 2 ranks against 1
         fluid = ~two["solid"]
         F_r = np.bincount(grid.owner_field()[fluid], minlength=grid.size)
@@ -451,6 +536,9 @@ def main():
                     help="cell counts to project (measured ones only)")
     ap.add_argument("--project-ranks", type=int, nargs="+", default=[2, 8, 10, 64, 1024])
     ap.add_argument("--seeds", type=int, default=3, help="random placements averaged in the model")
+    ap.add_argument("--stencil-share", type=float, default=0.3,
+                    help="replicated share of the coupling where the measured engine spreads the particles "
+                         "(fitted where it replicates them: 0.3 with 40 RBCs, 8113f59)")
     ap.add_argument("--mpirun", default="mpirun")
     ap.add_argument("--pyoif", default=os.path.join(ROOT, "build", "pyoif"))
     ap.add_argument("--csv", default="scaling.csv")
@@ -464,6 +552,7 @@ def main():
 
     # --- measure
     load_before = os.getloadavg()
+    engine_before = engine(args.pyoif)
     results = {}  # (cells, height) -> {ranks: data}
     heights = {}  # cells -> height measured at
     no_room = {}
@@ -498,6 +587,9 @@ def main():
     print("Measured: samples/cell_flow_in_bifurcation.py --full, "
           f"{args.cycles} x {args.steps} steps, least of {args.repeats}, OMP_NUM_THREADS={args.threads}; "
           f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after")
+    engine_after = engine(args.pyoif)
+    print(f"  {engine_before}" + ("" if engine_after == engine_before else
+                                 f"; CHANGED during the measurement, now {engine_after}"))
     hdr = (f"{'RBCs':>6s} {'N':>6s} {'ranks':>5s} {'s/1000':>8s} {'s/cell':>7s} {'speedup':>7s} {'eff':>5s} "
            f"{'balance':>7s} {'comm ms':>8s} {'halo kB':>8s} {'coupl kB':>8s}  decomposition")
     print(hdr)
@@ -515,12 +607,13 @@ def main():
             comm = rep.get("communication", 0.0) / rep["steps"] if k > 1 else 0.0
             bal = rep.get("balance", 1.0) if k > 1 else 1.0
             halo = max(r["halo_bytes"] for r in d["ranks"]) if k > 1 else 0
-            coupl = 24.0 * N * (k - 1) / k
+            spread = spreads(d, by_k[1])
+            coupl = coupling_bytes(d, spread)
             dec = d["ranks"][0]["decomposition"]
             print(f"{tag:>6s} {N:6d} {k:5d} {1e3 * t:8.2f} "
                   + (f"{1e3 * per_cell:7.3f} " if per_cell is not None else f"{'-':>7s} ")
                   + f"{t1 / t:7.2f} {100 * t1 / (k * t):4.0f}% {bal:7.3f} {1e3 * comm:8.3f} "
-                  f"{halo / 1e3:8.1f} {coupl / 1e3:8.1f}  {dec}")
+                  f"{halo / 1e3:8.1f} {coupl / 1e3:8.1f}  {dec}" + ("; work spread" if spread else ""))
             rows.append({"rbcs": n, "height": h, "particles": N, "ranks": k, "s_per_1000_steps": 1e3 * t,
                          "s_per_cell_per_1000_steps": "" if per_cell is None else 1e3 * per_cell,
                          "speedup": t1 / t, "efficiency": t1 / (k * t), "load_balance": bal,
@@ -529,7 +622,8 @@ def main():
                          "coupling_exchange_ms_per_step": 1e3 * max(r["coupling_exchange_seconds"]
                                                                     for r in d["ranks"]) / rep["steps"],
                          "halo_bytes_per_update": halo,
-                         "coupling_bytes_per_step": coupl, "lattice_share": d["timings"]["lb_fluid"] /
+                         "coupling_bytes_per_step": coupl, "particle_work_spread": spread,
+                         "resorts_per_step": max(d.get("rebuilds", 1) - 1, 0) / rep["steps"], "lattice_share": d["timings"]["lb_fluid"] /
                          d["timings"]["total"], "decomposition": dec,
                          "paper_one_core_s": PAPER[1].get(n, ""),
                          "paper_ten_cores_s": PAPER[10].get(n, "")})
@@ -537,7 +631,9 @@ def main():
         print(f"{n:6d} RBCs: does not fit the sample's seeding region ({why})")
     print("  s/cell: (t(n) - t(0)) / n per 1000 steps (same height); comm: halo + coupling exchanges "
           "per step, waiting included (largest rank); halo kB: sent per lattice update by the busiest rank; "
-          "coupl kB: received per MD step per rank, 24 N (K-1)/K")
+          "coupl kB: the coupling's forces received per MD step by a rank: 24 N (K-1)/K (the allgather where every rank "
+          "computes every particle) or 24 per particle whose stencil reaches the rank but whose cell another rank "
+          "owns (\"work spread\": each cell's particles computed by the rank of its first node; busiest rank)")
     print("  paper (Table 1, CPU s / 1000 steps, 1 core / 10 cores): "
           + ", ".join(f"{n}: {PAPER[1][n]:.2f} / {PAPER[10][n]:.2f}" for n in sorted(PAPER[1])))
     write_rows(args.csv, rows)
@@ -557,11 +653,11 @@ def main():
     for n in projected:
         h = heights[n]
         by_k = results[(n, h)]
-        cal = calibrate(by_k[1], by_k.get(2))
+        cal = calibrate(by_k[1], by_k.get(2), args.stencil_share)
         print(f"  {n} RBCs{'' if h == FULL_HEIGHT else f' (height {h:g})'}: per step L {1e3 * cal['L']:.3f} "
               f"ms, C {1e3 * cal['C']:.3f} (c_rep {1e3 * cal['c_rep']:.3f}, c_div {1e3 * cal['c_div']:.3f}), "
               f"M {1e3 * cal['M']:.3f}, O {1e3 * cal['O']:.3f}; measured total {1e3 * per_step(by_k[1]):.3f} ms; "
-              f"{cal['fit']}"
+              f"a re-sort every {1 / cal['rebuilds'] if cal['rebuilds'] > 0 else math.inf:.0f} steps; {cal['fit']}"
               + (f"; lattice busy per fluid node at 2 ranks / 1 rank: {cal['lattice_check']:.2f}"
                  if "lattice_check" in cal else ""))
         solid = by_k[1]["solid"]
@@ -584,13 +680,12 @@ def main():
         for P in sorted({1} | set(args.project_ranks)):
             dims = choose_dims(P, nodes)
             grid = Grid(dims, balanced_cuts(dims, fluid), nodes)
-            acc = {k: [] for k in ("today", "planned", "weak_today", "weak_planned")}
+            acc = {k: [] for d in DESIGNS for k in (d, "weak_" + d)}
             for scene, loads2 in zip(scenes, weak_loads):
                 loads = rank_loads(grid, solid, scene)
-                acc["today"].append(step_time(cal, loads, "today", P))
-                acc["planned"].append(step_time(cal, loads, "planned", P))
-                acc["weak_today"].append(step_time(cal, loads2, "today", P, weak=True))
-                acc["weak_planned"].append(step_time(cal, loads2, "planned", P, weak=True))
+                for d in DESIGNS:
+                    acc[d].append(step_time(cal, loads, d, P))
+                    acc["weak_" + d].append(step_time(cal, loads2, d, P, weak=True))
             row = {"rbcs": n, "height": h, "ranks": P, "grid": "x".join(map(str, dims))}
             for k, v in acc.items():
                 busy, comm = np.mean(v, axis=0)
@@ -602,16 +697,18 @@ def main():
         ref = rows_n[0]  # one rank: the same scene for strong and weak scaling
         for row in rows_n:
             P = row["ranks"]
-            for k in ("today", "planned"):
+            for k in DESIGNS:
                 row[f"{k}_strong_efficiency"] = ref[f"{k}_s_per_1000"] / (P * row[f"{k}_s_per_1000"])
                 row[f"{k}_weak_efficiency"] = ref[f"{k}_s_per_1000"] / row[f"weak_{k}_s_per_1000"]
         model_rows += rows_n
 
     print()
-    print("Projected (strong: t1/(P tP), the fixed scene; weak: t1/tP, one copy of the scene per rank; "
-          "s/1000: seconds per 1000 steps of the fixed scene, comm: its communication share)")
-    print(f"{'RBCs':>6s} {'ranks':>5s} {'grid':>8s} | {'measured':>8s} | {'today':>8s} {'comm':>5s} {'strong':>6s} "
-          f"{'weak':>6s} | {'planned':>8s} {'comm':>5s} {'strong':>6s} {'weak':>6s} | paper (Table 1)")
+    print("Projected, per design: s/1000 = seconds per 1000 steps of the fixed scene, comm = its communication "
+          "share, strong = t1/(P tP) (the fixed scene), weak = t1/tP (one copy of the scene per rank)")
+    print(f"{'':6s} {'':5s} {'':8s} | {'':8s} | " + " | ".join(f"{d:^27s}" for d in DESIGNS) + " |")
+    print(f"{'RBCs':>6s} {'ranks':>5s} {'grid':>8s} | {'measured':>8s} | "
+          + " | ".join(f"{'s/1000':>8s} {'comm':>5s} {'strong':>6s} {'weak':>5s}" for _ in DESIGNS)
+          + " | paper (Table 1)")
     for row in model_rows:
         n, P = row["rbcs"], row["ranks"]
         paper = ""
@@ -619,11 +716,10 @@ def main():
             paper = f"{PAPER[1][n]:.2f} / ({P} x {PAPER[P][n]:.2f}) = {100 * PAPER[1][n] / (P * PAPER[P][n]):.0f} %"
         tag = f"{n}" + ("" if row["height"] == FULL_HEIGHT else f" h{row['height']:g}")
         meas = f"{row['measured_s_per_1000']:8.3f}" if "measured_s_per_1000" in row else f"{'':8s}"
-        print(f"{tag:>6s} {P:5d} {row['grid']:>8s} | {meas} | {row['today_s_per_1000']:8.3f} "
-              f"{100 * row['today_comm_share']:4.0f}% {100 * row['today_strong_efficiency']:5.0f}% "
-              f"{100 * row['today_weak_efficiency']:5.0f}% | {row['planned_s_per_1000']:8.3f} "
-              f"{100 * row['planned_comm_share']:4.0f}% {100 * row['planned_strong_efficiency']:5.0f}% "
-              f"{100 * row['planned_weak_efficiency']:5.0f}% | {paper}")
+        print(f"{tag:>6s} {P:5d} {row['grid']:>8s} | {meas} | "
+              + " | ".join(f"{row[d + '_s_per_1000']:8.3f} {100 * row[d + '_comm_share']:4.0f}% "
+                           f"{100 * row[d + '_strong_efficiency']:5.0f}% {100 * row[d + '_weak_efficiency']:4.0f}%"
+                           for d in DESIGNS) + f" | {paper}")
     print("  paper's Table 1 efficiency t1/(P tP) at 3 / 5 / 6 / 10 cores: "
           + "; ".join(f"{n} cells " + " / ".join(f"{100 * PAPER[1][n] / (P * PAPER[P][n]):.0f}"
                                                  for P in (3, 5, 6, 10)) + " %" for n in sorted(PAPER[1])))

@@ -26,7 +26,8 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
   return moved;
 }
 
-void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut) {
+void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut,
+                         const std::uint8_t* owned) {
   m_blowup_distance = box.image_range();
   for (std::size_t i = 0; i < p.n_local(); ++i)
     box.fold(p.pos[i], p.image[i]);
@@ -45,7 +46,7 @@ void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cu
       }
     make_ghosts(p, box, m_range);
     p.ghost_force.assign(p.n_ghost(), Vec3::Zero());
-    build_pairs(p, m_range);
+    build_pairs(p, m_range, owned);
   }
   m_valid = true;
   ++m_n_rebuilds;
@@ -114,7 +115,7 @@ void CellSystem::build_exclusion_lists() {
   m_exclusion_lists_valid = true;
 }
 
-void CellSystem::build_pairs(const ParticleStore& p, double range) {
+void CellSystem::build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned) {
   if (!m_exclusion_lists_valid && !m_exclusions.empty())
     build_exclusion_lists();
   const std::size_t n_local = p.n_local();
@@ -162,9 +163,19 @@ void CellSystem::build_pairs(const ParticleStore& p, double range) {
     for (std::size_t i = 0; i < n_all; ++i)
       m_cell_particles[fill[cell_of[i]]++] = static_cast<int>(i);
   }
+  // spread over ranks: the cells holding a particle (or image) this rank
+  // owns; a pair of cells without one is skipped
+  std::vector<std::uint8_t> has_owned;
+  if (owned) {
+    has_owned.assign(n_cells, 0);
+    for (std::size_t i = 0; i < n_all; ++i)
+      has_owned[cell_of[i]] |= owned[p.owner(i)];
+  }
 
   const double range2 = range * range;
   auto consider = [&](int a, int b) {
+    if (owned && !owned[p.owner(a)] && !owned[p.owner(b)])
+      return;
     if (static_cast<std::size_t>(a) >= n_local)
       std::swap(a, b); // a is local from here on (if either is)
     if (static_cast<std::size_t>(a) >= n_local)
@@ -192,14 +203,17 @@ void CellSystem::build_pairs(const ParticleStore& p, double range) {
     for (int cy = 0; cy < nc[1]; ++cy)
       for (int cx = 0; cx < nc[0]; ++cx) {
         const int c = (cz * nc[1] + cy) * nc[0] + cx;
-        for (int i = m_cell_start[c]; i < m_cell_start[c + 1]; ++i)
-          for (int j = i + 1; j < m_cell_start[c + 1]; ++j)
-            consider(m_cell_particles[i], m_cell_particles[j]);
+        if (!owned || has_owned[c])
+          for (int i = m_cell_start[c]; i < m_cell_start[c + 1]; ++i)
+            for (int j = i + 1; j < m_cell_start[c + 1]; ++j)
+              consider(m_cell_particles[i], m_cell_particles[j]);
         for (const auto& s : shell) {
           const int nx = cx + s[0], ny = cy + s[1], nz = cz + s[2];
           if (nx < 0 || ny < 0 || nz < 0 || nx >= nc[0] || ny >= nc[1] || nz >= nc[2])
             continue;
           const int n = (nz * nc[1] + ny) * nc[0] + nx;
+          if (owned && !has_owned[c] && !has_owned[n])
+            continue;
           for (int i = m_cell_start[c]; i < m_cell_start[c + 1]; ++i)
             for (int j = m_cell_start[n]; j < m_cell_start[n + 1]; ++j)
               consider(m_cell_particles[i], m_cell_particles[j]);

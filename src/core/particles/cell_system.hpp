@@ -25,8 +25,11 @@ public:
    *  pair-and-image exactly once, within cutoff + skin at the last re-sort. */
   const std::vector<std::array<int, 2>>& pairs() const { return m_pairs; }
 
-  /** Fold, make ghosts, bin, build the pair list for interaction range max_cut. */
-  void rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut);
+  /** Fold, make ghosts, bin, build the pair list for interaction range max_cut.
+   *  With owned (per local index; particles spread over MPI ranks) only the
+   *  pairs with a particle this rank owns, in the order of the full list. */
+  void rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut,
+               const std::uint8_t* owned = nullptr);
   /** True when some particle moved more than skin/2 since the last re-sort or
    *  the structure was invalidated. Throws SimulationInstability on a
    *  non-finite position. */
@@ -104,7 +107,7 @@ private:
            static_cast<std::uint32_t>(b);
   }
   void make_ghosts(ParticleStore& p, const BoxGeometry& box, double range) const;
-  void build_pairs(const ParticleStore& p, double range);
+  void build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned);
   /** The exclusions as sorted partner lists per id (both directions). */
   void build_exclusion_lists();
 

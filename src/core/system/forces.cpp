@@ -58,8 +58,9 @@ void System::prepare_step(int moved) {
     report_fast_particle(m_time_step);
   if (code == 2)
     cells.needs_rebuild(p, time); // names the runaway particle
-  cells.rebuild(p, box, nonbonded.max_range());
   assign_owners();
+  cells.rebuild(p, box, nonbonded.max_range(), m_spread.owned.data());
+  build_exchange_lists();
 }
 
 void System::add_membrane_forces(Energies* e) {
@@ -175,15 +176,37 @@ void System::add_constraint_forces(Energies* e) {
   const double range = nonbonded.max_range();
   std::vector<double>& dist = m_constraint_dist;
   dist.resize(p.n_local());
+  // spread over ranks: the distances of this rank's particles only
+  const std::uint8_t* own = owned_mask();
+  std::vector<Vec3>& owned_pos = m_constraint_pos;
+  std::vector<std::size_t>& owned_index = m_constraint_index;
+  if (own) {
+    owned_pos.clear();
+    owned_index.clear();
+    for (std::size_t i = 0; i < p.n_local(); ++i)
+      if (own[i]) {
+        owned_pos.push_back(p.pos[i]);
+        owned_index.push_back(i);
+      }
+  }
   for (auto& constraint : m_constraints) {
     constraint->total_force.setZero();
     // all distances in one call (a tight loop for walls; bounded shapes skip
     // the exact distance of particles farther than the range from their
     // bounding box), the force where a particle is within its pair's range
-    constraint->shape->signed_distances(p.pos.data(), p.n_local(), range, dist.data());
-    const std::uint8_t* own = owned_mask();
+    if (own) {
+      std::vector<double>& owned_dist = m_constraint_owned_dist;
+      owned_dist.resize(owned_pos.size());
+      constraint->shape->signed_distances(owned_pos.data(), owned_pos.size(), range,
+                                          owned_dist.data());
+      std::fill(dist.begin(), dist.end(), HUGE_VAL);
+      for (std::size_t k = 0; k < owned_index.size(); ++k)
+        dist[owned_index[k]] = owned_dist[k];
+    } else {
+      constraint->shape->signed_distances(p.pos.data(), p.n_local(), range, dist.data());
+    }
     for (std::size_t i = 0; i < p.n_local(); ++i) {
-      if (dist[i] >= range || (own && !own[i]))
+      if (dist[i] >= range)
         continue;
       const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
       if (!params)

@@ -244,8 +244,10 @@ private:
   void update_spread();
   /** Every rank sends its particles' state to all (allgather). */
   void gather_all_particles();
-  /** Owners and the point-to-point lists, after a re-sort (all ranks alike). */
+  /** Owners from the current state (all ranks alike), before a re-sort. */
   void assign_owners();
+  /** The point-to-point lists, after the re-sort (all ranks alike). */
+  void build_exchange_lists();
   /** Sends the owners' positions and velocities (or normals) to the ranks
    *  that keep copies. */
   void exchange_current(bool normals);
@@ -294,6 +296,10 @@ private:
     m_shape_version_of_forces = constraint_shape_version();
   }
   std::vector<double> m_constraint_dist; ///< per particle, one constraint at a time
+  /// spread over ranks: this rank's particles' positions, indices, distances
+  std::vector<Vec3> m_constraint_pos;
+  std::vector<std::size_t> m_constraint_index;
+  std::vector<double> m_constraint_owned_dist;
   std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;

@@ -19,7 +19,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 #include <unordered_map>
 
 namespace pyoif {
@@ -129,43 +128,60 @@ void System::assign_owners() {
     m_spread.owner[i] = grid.owner_of(node_of(p.pos[ref]));
     m_spread.owned[i] = m_spread.owner[i] == me;
   }
-  // who needs whom: need[r] the particles of other ranks that rank r keeps
-  // current; only the lists this rank sends and receives are kept
-  std::unordered_map<int, std::set<int>> send, recv;
+  // the membranes compile this rank's cells anew only when they changed
+  if (m_spread.owned != owned_before)
+    ++m_spread.version;
+  m_spread.layout = p.layout_version;
+  m_spread.mol = p.mol_version;
+  m_spread.bonds = m_bonds_version;
+  m_spread.cuts = grid.cuts();
+}
+
+void System::build_exchange_lists() {
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  const DomainGrid& grid = m_lb->domain();
+  const int me = m_spread.comm.rank(), size = m_spread.comm.size();
+  const double agrid = m_lb->agrid();
+  const Vec3i nodes = m_lb->grid();
+  // who needs whom, from the state every rank has alike: only the lists
+  // this rank sends and receives are kept (per rank, then sorted)
+  std::vector<std::vector<int>> send(size), recv(size);
   auto needs = [&](int rank, int i) {
     const int o = m_spread.owner[i];
     if (o == rank)
       return;
     if (rank == me)
-      recv[o].insert(i);
+      recv[o].push_back(i);
     else if (o == me)
-      send[rank].insert(i);
+      send[rank].push_back(i);
   };
   // (1) coupling: the ranks whose subdomain the stencil can reach before
   // the next re-sort (a particle moves at most skin / 2 until then)
   const double reach = 0.5 * cells.skin;
   const auto& cuts = grid.cuts();
   for (std::size_t i = 0; i < n; ++i) {
-    std::array<std::vector<int>, 3> coords;
+    int coords[3][4], count[3] = {0, 0, 0};
     for (int d = 0; d < 3; ++d) {
       const int lo = static_cast<int>(std::floor((p.pos[i][d] - reach) / agrid - 0.5));
       const int hi = static_cast<int>(std::floor((p.pos[i][d] + reach) / agrid - 0.5)) + 1;
-      for (int g = lo; g <= hi; ++g) {
+      for (int g = lo; g <= hi && count[d] < 4; ++g) {
         const int w = ((g % nodes[d]) + nodes[d]) % nodes[d];
         const int c = static_cast<int>(std::upper_bound(cuts[d].begin(), cuts[d].end(), w) -
                                        cuts[d].begin()) -
                       1;
-        if (std::find(coords[d].begin(), coords[d].end(), c) == coords[d].end())
-          coords[d].push_back(c);
+        if (std::find(coords[d], coords[d] + count[d], c) == coords[d] + count[d])
+          coords[d][count[d]++] = c;
       }
     }
-    for (const int cx : coords[0])
-      for (const int cy : coords[1])
-        for (const int cz : coords[2])
-          needs(grid.rank_of(Vec3i(cx, cy, cz)), static_cast<int>(i));
+    for (int x = 0; x < count[0]; ++x)
+      for (int y = 0; y < count[1]; ++y)
+        for (int z = 0; z < count[2]; ++z)
+          needs(grid.rank_of(Vec3i(coords[0][x], coords[1][y], coords[2][z])), static_cast<int>(i));
   }
   // (2) pair contacts (the pair list, built from the current state, holds
-  // every pair within range + skin until the next re-sort)
+  // every pair with a particle of this rank within range + skin until the
+  // next re-sort)
   for (const auto& pair : cells.pairs()) {
     const int a = pair[0], b = p.owner(static_cast<std::size_t>(pair[1]));
     needs(m_spread.owner[a], b);
@@ -180,35 +196,24 @@ void System::assign_owners() {
       for (int k = 0; k < g.n_particles; ++k)
         for (int l = 0; l < g.n_particles; ++l) {
           const int ik = p.index(ids[k]), il = p.index(ids[l]);
-          if (k != l && ik >= 0 && il >= 0)
+          if (k != l && ik >= 0 && il >= 0 && m_spread.owner[ik] != m_spread.owner[il])
             needs(m_spread.owner[ik], il);
         }
     }
   }
   m_spread.peers.clear();
-  std::set<int> ranks;
-  for (const auto& [r, list] : send)
-    ranks.insert(r);
-  for (const auto& [r, list] : recv)
-    ranks.insert(r);
   m_spread.current = m_spread.owned;
-  for (const int r : ranks) {
-    Spread::Peer peer{r, {}, {}, {}, {}};
-    if (send.count(r))
-      peer.send.assign(send[r].begin(), send[r].end());
-    if (recv.count(r))
-      peer.recv.assign(recv[r].begin(), recv[r].end());
-    for (const int i : peer.recv)
+  for (int r = 0; r < size; ++r) {
+    for (auto* list : {&send[r], &recv[r]}) {
+      std::sort(list->begin(), list->end());
+      list->erase(std::unique(list->begin(), list->end()), list->end());
+    }
+    if (send[r].empty() && recv[r].empty())
+      continue;
+    for (const int i : recv[r])
       m_spread.current[i] = 1;
-    m_spread.peers.push_back(std::move(peer));
+    m_spread.peers.push_back({r, std::move(send[r]), std::move(recv[r]), {}, {}});
   }
-  // the membranes compile this rank's cells anew only when they changed
-  if (m_spread.owned != owned_before)
-    ++m_spread.version;
-  m_spread.layout = p.layout_version;
-  m_spread.mol = p.mol_version;
-  m_spread.bonds = m_bonds_version;
-  m_spread.cuts = grid.cuts();
 }
 
 void System::exchange_current(bool normals) {
