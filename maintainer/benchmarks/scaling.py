@@ -2,18 +2,21 @@
 """Parallel scaling of the paper's bifurcation scene: the shape of the
 PyOIF paper's Table 1 (seconds per 1000 steps at 1..10 cores with 0, 5, 10,
 20, 40, 60 RBCs of 374 nodes; doc/model.md) measured at 1 and 2 MPI ranks,
-and a model that projects it to 8, 10, 64 and 1024 ranks for today's
-design (the fluid split over the ranks, the particles replicated on every
-rank) and for the planned one (particles and whole cells owned by ranks,
-doc/architecture.md "Who owns a membrane", option (b)).
+and a model that projects it to 8, 10, 64 and 1024 ranks for three designs:
+"replicated" (the fluid split over the ranks, every particle computed by
+every rank: the engine up to 8113f59), "spread" (every rank stores every
+particle, each cell's particles computed by the rank of its first node,
+copies kept current point to point, all of them gathered at every re-sort:
+378d77b) and "owned" (particles stored where they are and whole cells
+evaluated by one rank: doc/architecture.md "Who owns a membrane", (b)).
 
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/scaling.py [--cells 0 5 10 20 40 60]
         [--ranks 1 2] [--steps 500] [--cycles 1] [--repeats 2] [--tall-height 26]
         [--project 0 40 60] [--project-ranks 2 8 10 64 1024] [--seeds 3]
-        [--csv scaling.csv] [--model-csv scaling_model.csv]
+        [--stencil-share 0.3] [--csv scaling.csv] [--model-csv scaling_model.csv]
 
 (as root, Open MPI needs OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-in the environment). At default settings it takes about 3-5 minutes on 2 cores.
+in the environment). At default settings it takes about 3 minutes on 2 cores.
 
 Measurement. Each configuration runs samples/cell_flow_in_bifurcation.py
 --full (box 160x40x22, agrid 1 um, time step = tau = 0.1 us, RBCs of 374
@@ -22,19 +25,25 @@ nodes and the stiff rare cell of 642 nodes) with --cells N, --cycles and
 build/pyoif` (K = 1: the launcher alone), OMP_NUM_THREADS=1, unchanged: the
 sample runs inside this script's --child mode (runpy), which afterwards adds
 what the sample does not print: every rank's halo bytes and exchange
-seconds, the decomposition, the fluid mask and the particle positions. The
-figures are read from the sample's own timing report (integrator.
-timing_report(): the time steps alone; set-up and seeding are not in it;
-under MPI each phase the largest over the ranks, and the last line the
-exchanges with other ranks and the load balance busy max/mean); the least
-of --repeats runs counts. Printed per configuration: seconds per 1000 steps,
-the cost per cell (t(n) - t(0)) / n, the speed-up t1/tK and efficiency
-t1/(K tK), the load balance, the communication (halo + coupling exchanges,
-waiting included) per step, the halo bytes a rank sends per lattice update
-(lbf._core.halo_bytes, the largest over ranks; one update per MD step here)
-and the coupling bytes a rank receives per MD step, 24 N (K-1)/K for N
-particles (the MPI_Allgatherv of each particle's force, 3 doubles, from the
-rank of its stencil's first node; about N/K given by each rank).
+seconds, the decomposition, the re-sorts, the fluid mask and the particles'
+positions and cells. The figures are read from the sample's own timing
+report (integrator.timing_report(): the time steps alone; set-up and
+seeding are not in it; under MPI each phase the largest over the ranks, and
+the last line the exchanges with other ranks and the load balance busy
+max/mean); the least of --repeats runs counts. Printed per configuration:
+seconds per 1000 steps, the cost per cell (t(n) - t(0)) / n, the speed-up
+t1/tK and efficiency t1/(K tK), the load balance, the communication (halo +
+coupling exchanges, waiting included) per step, the halo bytes a rank sends
+per lattice update (lbf._core.halo_bytes, the largest over ranks; one
+update per MD step here) and the coupling bytes a rank receives per MD
+step: 24 N (K-1)/K for N particles where every rank computes every particle
+(the MPI_Allgatherv of each particle's force, 3 doubles, from the rank of
+its stencil's first node, about N/K from each rank), or 24 per particle
+whose stencil reaches the rank while another rank owns its cell (point to
+point to the owner; from the run's final positions) where the work is
+spread (told by the membrane time per rank: the whole at every rank, or a
+share). Also printed: the tree's commit and the engine's build time, before
+and after (a rebuild during the measurement is flagged).
 The sample's seeding region holds at most 48 RBCs + the rare cell at the
 paper's height 20 (box 160x40x22); a count that does not fit is measured at
 --height --tall-height (default 26: box 160x40x28, 27 % more lattice), with
@@ -48,43 +57,57 @@ integrator.timings()):
      plane, the grid with the least halo surface, as DomainGrid chooses);
   C  the coupling (thermostat): c_div scales with the particles whose
      interpolation stencil touches the rank's subdomain, c_rep (finding the
-     stencils, the loop over all particles) is replicated; the split is fitted
-     to the 2-rank run (each rank's coupling less its exchange seconds);
-  R  the particles' own work: membranes M (cells' moduli) + the rest O
-     (bonds, contacts, walls, velocity Verlet, neighbour lists).
+     stencils, the loop over all particles) is replicated where every rank
+     computes every particle; the split is fitted to the 2-rank run when
+     that engine replicates (each rank's coupling less its exchange
+     seconds), else c_rep = --stencil-share C (0.3: the fit with 40 RBCs
+     on the replicating engine, 8113f59);
+  M  the membranes (cells' moduli), O the rest of the particles' work
+     (bonds, contacts, walls, velocity Verlet, neighbour lists);
+  the re-sorts per step (cell_system.n_rebuilds, less the set-up's).
 Communication, alpha-beta (as ownership_model.py: alpha = 1.5 us per
-message, beta = 10 GB/s), per MD step on the busiest rank:
-  halo        n_peers alpha + 8 (crossing fluid populations, counted link by
-              link on the mask: both ends fluid, D3Q19)/beta;
-  ghost velocities for the coupling's stencils: n_peers alpha + 24 (nodes of
-              the ghost layer on split axes)/beta;
-  allgather   (today) ceil(log2 P) alpha + 24 N (P-1)/P / beta;
-  particle ghosts (planned) positions out and forces back: 2 n_peers alpha
-              + 48 (particles within cutoff + skin = 1.3 um outside the
-              subdomain)/beta;
-  cells (b)   (planned) each cell's membrane evaluated by the rank of its
-              first node: 72 bytes per remote node (positions in, forces
-              and normals back, ownership_model.py) / beta + n_peers alpha
-              for the normals' extra round.
-Today:   t(P) = max_r [L F_r/F + c_rep + c_div S_r/N + R] + comm
-Planned: t(P) = max_r [L F_r/F + C S_r/N + M V_r/V + O N_r/N] + comm
+message, beta = 10 GB/s), per MD step on the busiest rank; a round of
+neighbour messages costs n_peers alpha (n_peers: the distinct neighbour
+ranks, up to 26), an allgather ceil(log2 P) alpha + bytes/beta, an
+allreduce 2 ceil(log2 P) alpha:
+  all designs: the halo (1 round, 8 bytes per crossing fluid population,
+      counted link by link on the fluid mask, D3Q19; checked against
+      lbf._core.halo_bytes) and the fluid velocities of the coupling's
+      ghost layer (1 round, 24 bytes per ghost node on split axes);
+  replicated: the allgather of the coupling forces, 24 N (P-1)/P bytes;
+  spread: 3 rounds (copies' positions and velocities, normals, coupling
+      forces to the owners; 96 bytes per copy, a copy being a particle
+      within 1.3 um (largest cutoff + skin) of the subdomain whose cell
+      another rank owns), 2 allreduces (the agreement on re-sorts and on
+      errors), and per re-sort an allgather of 15 doubles per particle,
+      120 N (P-1)/P bytes;
+  owned: 2 rounds of particle ghosts (positions out, forces back: 48 bytes
+      per particle within 1.3 um outside the subdomain) and the (b) cell
+      exchange of ownership_model.py (72 bytes per node of a cell held by
+      another rank than the cell's evaluator, 1 more round for normals).
+Busy time of rank r (the step waits for the slowest: max over r, plus the
+communication):
+  replicated  L F_r/F + c_rep + c_div S_r/N + M + O
+  spread      L F_r/F + C S_r/N + (M + O) V_r/V
+  owned       L F_r/F + C S_r/N + M V_r/V + O N_r/N
 with F_r fluid nodes, S_r particles whose stencil touches the subdomain,
-N_r particles held (by position), V_r nodes of the cells the rank evaluates
-(cells of 374 and 642 nodes), and comm the sum of the rounds above (each
-the busiest rank's; a bulk-synchronous step waits for the slowest).
-Efficiency t(1)/(P t(P)). Strong scaling: the fixed scene (--project cell
-counts; the 60-cell scene at its measured height). Weak scaling: one copy
-of the scene per rank, copies side by side along x (the grid with the least
-halo), so a rank's subdomain is one copy with two x neighbours: today every
-rank holds all P N particles (R and c_rep grow P-fold, the allgather
-carries 24 N (P-1) bytes); planned: every rank its own copy's particles,
-efficiency t(1)/t(P). Cells are placed as ownership_model.py places them
-(uniform centres in the channel, random orientation, no overlap test;
---seeds placements averaged): cells spread over the channel as in a long
-run, not the seeding's cluster. The model ignores cache effects (a smaller
-subdomain is faster per node), second-neighbour messages below one cell
-per subdomain, particle migration, and collectives other than those named
-(e.g. the cells' volumes); it gives the order of magnitude.
+N_r particles held (by position), V_r nodes of the cells whose first node
+the rank holds (cells of 374 and 642 nodes). Strong scaling: the fixed
+scene (--project cell counts; the 60-cell scene at its measured height),
+efficiency t(1)/(P t(P)). Weak scaling: one copy of the scene per rank,
+copies side by side along x (the grid with the least halo), so a rank's
+subdomain is one copy with two x neighbours; efficiency t(1)/t(P). Where
+storage is replicated every rank holds all P N particles: replicated
+computes all of them (M, O, c_rep P-fold, the allgather 24 N (P-1) bytes),
+spread gathers them all at every re-sort (120 N (P-1) bytes). Cells are
+placed as ownership_model.py places them (uniform centres in the channel,
+random orientation, no overlap test; --seeds placements averaged): spread
+over the channel as in a long run, not the seeding's cluster. The model
+ignores cache effects (a smaller subdomain is faster per node), memory (P N
+particles per rank where storage is replicated), second-neighbour messages
+below one cell per subdomain, particle migration, and collectives other
+than those named (e.g. the cells' volumes); it gives the order of
+magnitude, and its 2-rank row is printed beside the measured one.
 """
 import argparse
 import json

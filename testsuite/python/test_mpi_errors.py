@@ -4,6 +4,7 @@ behind) and says which rank failed; only rank 0 prints unless --all-ranks or
 PYOIF_ALL_RANKS=1; lbmd.rank, lbmd.size and lbmd.comm are mpi4py's. Each test
 starts mpirun itself, so this file runs serially under CTest."""
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -111,6 +112,60 @@ class ErrorOnOneRank(Base):
         self.assertIn("[rank 1] ValueError: boom on rank 1", err)
         self.assertNotIn("[rank 0]", err)
         self.assertNotIn("passed the barrier", out)
+        self.assertLess(seconds, 30.0)
+        self.assert_ranks_gone()
+
+    def test_engine_error_on_one_rank_raised_on_every_rank(self):
+        """With a fluid the particles are spread over the ranks: a particle
+        that rank 1 integrates is pushed into a wall. Only rank 1 sees it,
+        yet every rank raises the same SimulationInstability (the script
+        catches it and goes on: no rank is left waiting), and likewise for
+        a fluid node that becomes unstable in rank 1's subdomain."""
+        path = self.script("""
+            import os, sys
+            import lbmd
+            #PID
+            def scene():
+                s = lbmd.System(box_l=[16.0, 8.0, 8.0])
+                s.time_step = 0.1
+                s.cell_system.node_grid = [2, 1, 1]
+                lbf = lbmd.lb.LBFluid(agrid=1.0, tau=0.1, dens=1.0, visc=1.0)
+                s.actors.add(lbf)
+                s.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
+                return s, lbf
+            s, lbf = scene()
+            s.constraints.add(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=1.0), particle_type=1)
+            s.non_bonded_inter[0, 1].soft_sphere.set_params(a=1e-4, n=1.0, cutoff=1.0)
+            # x = 12: rank 1's half; driven through the wall at z = 1
+            s.part.add(pos=[[12.0, 4.0, 1.5], [3.0, 4.0, 4.0]], v=[[0, 0, -2.0], [0, 0, 0]])
+            try:
+                s.integrator.run(20)
+                print(f"@rank {lbmd.rank}: no error@", file=sys.stderr, flush=True)
+            except lbmd.SimulationInstability as e:
+                print(f"@rank {lbmd.rank} caught: {e}@", file=sys.stderr, flush=True)
+            s2, lbf2 = scene()
+            lbf2[12, 4, 4].velocity = [8.0, 0.0, 0.0]  # 0.8 lattice units, beyond the sound speed; rank 1
+            try:
+                s2.integrator.run(5)
+                print(f"@rank {lbmd.rank}: no fluid error@", file=sys.stderr, flush=True)
+            except lbmd.SimulationInstability as e:
+                print(f"@rank {lbmd.rank} fluid: {e}@", file=sys.stderr, flush=True)
+            lbmd.comm.barrier()
+            print("all ranks went on")
+            """)
+        rc, out, err, seconds = self.mpirun(path, self.tmp.name)
+        self.assertEqual(rc, 0, err)
+        self.assertIn("all ranks went on", out)
+        # (the ranks' lines may interleave on stderr: markers delimit them)
+        caught = dict(re.findall(r"@rank (\d) caught: (.*?)@", err, re.S))
+        self.assertEqual(sorted(caught), ["0", "1"], err)
+        self.assertTrue(caught["0"].startswith("particle 0 "), caught)
+        self.assertIn("penetrated", caught["0"])
+        self.assertEqual(caught["0"], caught["1"])
+        fluid = dict(re.findall(r"@rank (\d) fluid: (.*?)@", err, re.S))
+        self.assertEqual(sorted(fluid), ["0", "1"], err)
+        self.assertIn("unstable at node (12, 4, 4)", fluid["0"])
+        self.assertEqual(fluid["0"], fluid["1"])
         self.assertLess(seconds, 30.0)
         self.assert_ranks_gone()
 
