@@ -1,6 +1,6 @@
-// The one interface every collective operation goes through. On one rank the
-// reductions are no-ops; the MPI domain-decomposition issue extends this class
-// (Cartesian topology, halo and ghost exchange) without touching its users.
+// The System's reductions: on one rank they are no-ops. The decomposition's
+// point-to-point exchanges (the lattice's halo: DomainGrid and LBFluid; the
+// particles' copies: system_parallel.cpp) use the communicator directly.
 #pragma once
 
 #include <mpi.h>

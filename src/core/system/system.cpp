@@ -11,10 +11,10 @@
 
 namespace pyoif {
 
-// Until the domain decomposition lands, every rank of an
-// mpirun holds the whole system (replicated SPMD), so the System's reductions
-// run over MPI_COMM_SELF: a reduction over all ranks would count each particle
-// once per rank.
+// `comm` is MPI_COMM_SELF: without a decomposed fluid every rank of an mpirun
+// holds and computes the whole system (a reduction over all ranks would count
+// each particle once per rank); with one, the particles' reductions go over
+// the fluid's ranks (spread_comm, system_parallel.cpp).
 System::System(const Vec3& box_l, const std::array<bool, 3>& periodic)
     : box(box_l, periodic), comm(MPI_COMM_SELF) {}
 
