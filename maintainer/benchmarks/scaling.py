@@ -13,7 +13,8 @@ evaluated by one rank: doc/architecture.md "Who owns a membrane", (b)).
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/scaling.py [--cells 0 5 10 20 40 60]
         [--ranks 1 2] [--steps 500] [--cycles 1] [--repeats 2] [--tall-height 26]
         [--project 0 40 60] [--project-ranks 2 8 10 64 1024] [--seeds 3]
-        [--stencil-share 0.3] [--csv scaling.csv] [--model-csv scaling_model.csv]
+        [--stencil-share 0.3] [--latency message|round] [--csv scaling.csv]
+        [--model-csv scaling_model.csv] [--save-runs runs.pkl | --load-runs runs.pkl]
 
 (as root, Open MPI needs OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 in the environment). At default settings it takes about 3 minutes on 2 cores.
@@ -30,7 +31,9 @@ positions and cells. The figures are read from the sample's own timing
 report (integrator.timing_report(): the time steps alone; set-up and
 seeding are not in it; under MPI each phase the largest over the ranks, and
 the last line the exchanges with other ranks and the load balance busy
-max/mean); the least of --repeats runs counts. Printed per configuration:
+max/mean); the least of --repeats runs counts (made in rounds over all
+configurations, so that a burst of load does not hit every run of one).
+Printed per configuration:
 seconds per 1000 steps, the cost per cell (t(n) - t(0)) / n, the speed-up
 t1/tK and efficiency t1/(K tK), the load balance, the communication (halo +
 coupling exchanges, waiting included) per step, the halo bytes a rank sends
@@ -68,7 +71,8 @@ integrator.timings()):
 Communication, alpha-beta (as ownership_model.py: alpha = 1.5 us per
 message, beta = 10 GB/s), per MD step on the busiest rank; a round of
 neighbour messages costs n_peers alpha (n_peers: the distinct neighbour
-ranks, up to 26), an allgather ceil(log2 P) alpha + bytes/beta, an
+ranks, up to 26; --latency round: alpha, as ownership_model.py counts a
+round of concurrent messages), an allgather ceil(log2 P) alpha + bytes/beta, an
 allreduce 2 ceil(log2 P) alpha:
   all designs: the halo (1 round, 8 bytes per crossing fluid population,
       counted link by link on the fluid mask, D3Q19; checked against
@@ -108,11 +112,15 @@ particles per rank where storage is replicated), second-neighbour messages
 below one cell per subdomain, particle migration, and collectives other
 than those named (e.g. the cells' volumes); it gives the order of
 magnitude, and its 2-rank row is printed beside the measured one.
+--save-runs keeps the measured runs (reports, masks, positions) and
+--load-runs projects from them again without measuring, e.g. with another
+--latency, --stencil-share or --project-ranks.
 """
 import argparse
 import json
 import math
 import os
+import pickle
 import re
 import subprocess
 import sys
@@ -128,7 +136,6 @@ SAMPLE = os.path.join(ROOT, "samples", "cell_flow_in_bifurcation.py")
 
 ALPHA = 1.5e-6      # s per message (as ownership_model.py)
 BETA = 10e9         # bytes per s
-RBC_NODES, RARE_NODES = 374, 642
 GHOST_RANGE = 1.3   # largest cutoff (1.0, node-wall) + skin 0.3
 FULL_HEIGHT = 20.0  # the sample's --full channel height
 
@@ -168,8 +175,9 @@ def child(json_path, argv):
     if comm.Get_rank() == 0:
         np.savez(json_path + ".npz", solid=mask, pos=pos, mol=mol)
         with open(json_path, "w") as f:
-            json.dump(dict(timings=t, ranks=ranks, n_particles=len(pos), box=list(system.box_l),
-                           rebuilds=int(system.cell_system.n_rebuilds)), f)
+            json.dump(dict(timings=t, ranks=ranks, n_particles=len(pos),
+                           rebuilds=int(system.cell_system.n_rebuilds),
+                           particles_spread=getattr(system._core, "particles_spread", None)), f)
 
 
 # ----------------------------------------------------------- measurement
@@ -178,9 +186,9 @@ class NoRoom(Exception):
 
 
 def parse_report(out):
-    """The sample's timing report: phase seconds by label, total, steps, and
-    under MPI the exchanges' seconds and the load balance."""
-    rep = {"phases": {}}
+    """The sample's timing report: total seconds and steps, and under MPI the
+    exchanges' seconds and the load balance (its last line)."""
+    rep = {}
     for line in out.splitlines():
         m = re.match(r"total \((\d+) steps\)\s+([\d.]+)\s", line)
         if m:
@@ -189,16 +197,13 @@ def parse_report(out):
         m = re.search(r"(\d+) ranks\b.*exchanges with other ranks ([\d.]+) s.*load balance[^)]*\)\s*([\d.]+)", line)
         if m:
             rep["ranks"], rep["communication"], rep["balance"] = int(m.group(1)), float(m.group(2)), float(m.group(3))
-            continue
-        m = re.match(r"(.+?)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)%$", line)
-        if m:
-            rep["phases"][m.group(1).strip()] = float(m.group(2))
     if "total" not in rep:
         raise RuntimeError("no timing report in the sample's output:\n" + out[-2000:])
     return rep
 
 
 def run_once(args, cells, ranks, height, tmp):
+    """One run of the sample at `ranks` ranks: its report and the child's data."""
     js = os.path.join(tmp, f"run_{cells}_{ranks}_{height}.json")
     sample_args = [SAMPLE, "--full", "--cells", str(cells), "--cycles", str(args.cycles), "--steps",
                    str(args.steps), "--output", os.path.join(tmp, "out")]
@@ -224,10 +229,9 @@ def run_once(args, cells, ranks, height, tmp):
     return data
 
 
-def measure(args, cells, ranks, height, tmp):
-    """The quietest of --repeats runs (least time per step)."""
-    runs = [run_once(args, cells, ranks, height, tmp) for _ in range(args.repeats)]
-    return min(runs, key=lambda d: d["report"]["total"] / d["report"]["steps"])
+def per_step(run):
+    """Wall seconds per MD step of a run, from the sample's report."""
+    return run["report"]["total"] / run["report"]["steps"]
 
 
 def engine(pyoif):
@@ -414,7 +418,7 @@ def meshes():
     return om.mesh("rbc374", 3.91)[0], om.mesh("sphere642", 7.5)[0]
 
 
-def step_time(cal, loads, design, P, weak=False):
+def step_time(cal, loads, design, P, weak=False, per_message=True):
     """(busy, comm) seconds per step on the busiest rank, model of the module
     docstring. cal: per-step seconds L, c_rep, c_div, M, O, rebuilds per step."""
     L, c_rep, c_div, M, O = (cal[k] for k in ("L", "c_rep", "c_div", "M", "O"))
@@ -432,7 +436,7 @@ def step_time(cal, loads, design, P, weak=False):
     log_p = math.ceil(math.log2(P)) if P > 1 else 0
     halo = loads["halo"][pick].max() if P > 1 else 0.0
     vel = loads["vel"][pick].max() if P > 1 else 0.0
-    rounds = lambda k: k * peers * ALPHA  # k rounds of neighbour messages
+    rounds = lambda k: k * (peers if per_message else min(peers, 1)) * ALPHA  # k rounds of neighbour messages
     lattice = (rounds(2) + (halo + vel) / BETA) if P > 1 else 0.0
     if design == "replicated":
         busy = (L * Fr / F + c_rep * copies + c_div * np.minimum(Sr / N, 1.0) + (M + O) * copies).max()
@@ -456,14 +460,21 @@ def step_time(cal, loads, design, P, weak=False):
 
 def spreads(run, one):
     """Whether the engine of a run at K > 1 ranks spreads the particles' work
-    (each cell's membrane computed by one rank) rather than replicating it:
-    the mean membrane time per rank against the 1-rank run."""
+    (each cell's particles computed by one rank) rather than replicating it:
+    system._core.particles_spread where the engine has it, else told by the
+    membrane time summed over the ranks against the lattice's (whose work is
+    split either way), about 1 (spread) or K (replicated) times the 1-rank
+    ratio."""
     per = run["timings"].get("per_rank")
     if not per:
         return False
-    m1 = one["timings"]["membrane"] / one["timings"]["steps"]
-    share = np.mean([r["membrane"] / r["steps"] for r in per]) / max(m1, 1e-30)
-    return share < 0.5 * (1.0 + 1.0 / len(per))
+    if run.get("particles_spread") is not None:
+        return bool(run["particles_spread"])
+    t1 = one["timings"]
+    ratio1 = t1["membrane"] / max(t1["lb_fluid"], 1e-30)
+    ratio = sum(r["membrane"] for r in per) / max(sum(r["lb_fluid"] - x["halo_seconds"]
+                                                      for r, x in zip(per, run["ranks"])), 1e-30)
+    return ratio / max(ratio1, 1e-30) < 0.5 * (1 + len(per))
 
 
 def stencil_ranks(grid, pos):
@@ -541,6 +552,61 @@ def calibrate(one, two, stencil_share):
     return cal
 
 
+def measure_all(args, ranks_list):
+    """Run every configuration --repeats times; the quietest run of each, the
+    height each count was measured at, the counts that did not fit, and the
+    header of the measured table (settings, load, engine)."""
+    load_before = os.getloadavg()
+    engine_before = engine(args.pyoif)
+    results = {}  # (cells, height) -> {ranks: data}
+    heights = {}  # cells -> height measured at
+    no_room = {}
+
+    def keep(n, h, k, d):
+        """Keep the quieter of the runs of a configuration."""
+        old = results.setdefault((n, h), {}).get(k)
+        if old is None or per_step(d) < per_step(old):
+            results[(n, h)][k] = d
+        print(f"  {n:3d} RBCs, height {h:g}, {k} rank(s): {1e3 * per_step(d):.2f} s / 1000 steps", flush=True)
+
+    # the repeats are rounds over all configurations, so that a burst of
+    # load on a shared machine does not hit all runs of one configuration
+    with tempfile.TemporaryDirectory() as tmp:
+        todo = [(n, FULL_HEIGHT) for n in sorted(set(args.cells))]
+        configs = []
+        print(f"round 1 of {args.repeats}", flush=True)
+        while todo:
+            n, h = todo.pop(0)
+            try:
+                for k in ranks_list:
+                    keep(n, h, k, run_once(args, n, k, h, tmp))
+                configs.append((n, h))
+                if n not in heights or h == FULL_HEIGHT:
+                    heights[n] = h
+            except NoRoom as e:
+                results.pop((n, h), None)
+                if h == FULL_HEIGHT and args.tall_height > 0:
+                    print(f"  {n} RBCs do not fit the sample's seeding region at height {h:g}; "
+                          f"measuring at --height {args.tall_height:g}", flush=True)
+                    todo.append((n, args.tall_height))
+                    if (0, args.tall_height) not in results and all(m != (0, args.tall_height) for m in todo):
+                        todo.insert(0, (0, args.tall_height))
+                else:
+                    no_room[n] = str(e)
+        for r in range(1, args.repeats):
+            print(f"round {r + 1} of {args.repeats}", flush=True)
+            for n, h in configs:
+                for k in ranks_list:
+                    keep(n, h, k, run_once(args, n, k, h, tmp))
+    engine_after = engine(args.pyoif)
+    header = ("Measured: samples/cell_flow_in_bifurcation.py --full, "
+              f"{args.cycles} x {args.steps} steps, least of {args.repeats}, OMP_NUM_THREADS={args.threads}; "
+              f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after\n  "
+              + engine_before + ("" if engine_after == engine_before else
+                                 f"; CHANGED during the measurement, now {engine_after}"))
+    return results, heights, no_room, header
+
+
 # ------------------------------------------------------------------- main
 def main():
     if len(sys.argv) > 3 and sys.argv[1] == "--child" and sys.argv[3] == "--":
@@ -566,6 +632,12 @@ def main():
     ap.add_argument("--pyoif", default=os.path.join(ROOT, "build", "pyoif"))
     ap.add_argument("--csv", default="scaling.csv")
     ap.add_argument("--model-csv", default="scaling_model.csv")
+    ap.add_argument("--latency", choices=("message", "round"), default="message",
+                    help="alpha per message (a round of neighbour messages costs n_peers alpha) or per round "
+                         "(alpha, as ownership_model.py counts)")
+    ap.add_argument("--save-runs", default=None, help="keep the measured runs in this file (pickle)")
+    ap.add_argument("--load-runs", default=None,
+                    help="take the runs from a --save-runs file instead of measuring (to vary the model)")
     args = ap.parse_args()
     if args.steps < 1 or args.repeats < 1 or args.cycles < 1 or min(args.ranks) < 1:
         ap.error("--steps, --cycles, --repeats and --ranks must be at least 1")
@@ -573,46 +645,22 @@ def main():
     if 1 not in ranks_list:
         ap.error("--ranks must include 1 (the reference of speed-up and model)")
 
-    # --- measure
-    load_before = os.getloadavg()
-    engine_before = engine(args.pyoif)
-    results = {}  # (cells, height) -> {ranks: data}
-    heights = {}  # cells -> height measured at
-    no_room = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        todo = [(n, FULL_HEIGHT) for n in sorted(set(args.cells))]
-        while todo:
-            n, h = todo.pop(0)
-            try:
-                for k in ranks_list:
-                    results.setdefault((n, h), {})[k] = measure(args, n, k, h, tmp)
-                    d = results[(n, h)][k]["report"]
-                    print(f"  measured {n:3d} RBCs, height {h:g}, {k} rank(s): "
-                          f"{1e3 * d['total'] / d['steps']:.2f} s / 1000 steps", flush=True)
-                if n not in heights or h == FULL_HEIGHT:
-                    heights[n] = h
-            except NoRoom as e:
-                results.pop((n, h), None)
-                if h == FULL_HEIGHT and args.tall_height > 0:
-                    print(f"  {n} RBCs do not fit the sample's seeding region at height {h:g}; "
-                          f"measuring at --height {args.tall_height:g}", flush=True)
-                    todo.append((n, args.tall_height))
-                    if (0, args.tall_height) not in results and all(m != (0, args.tall_height) for m in todo):
-                        todo.insert(0, (0, args.tall_height))
-                else:
-                    no_room[n] = str(e)
-
-    def per_step(d):
-        return d["report"]["total"] / d["report"]["steps"]
+    # --- measure (or take the runs of an earlier invocation)
+    if args.load_runs:
+        with open(args.load_runs, "rb") as f:
+            saved = pickle.load(f)
+        results, heights, no_room, header = (saved[k] for k in ("results", "heights", "no_room", "header"))
+        header = f"{header} (runs read from {args.load_runs})"
+        ranks_list = sorted({k for by_k in results.values() for k in by_k})
+    else:
+        results, heights, no_room, header = measure_all(args, ranks_list)
+        if args.save_runs:
+            with open(args.save_runs, "wb") as f:
+                pickle.dump(dict(results=results, heights=heights, no_room=no_room, header=header), f)
 
     # --- measured table
     print()
-    print("Measured: samples/cell_flow_in_bifurcation.py --full, "
-          f"{args.cycles} x {args.steps} steps, least of {args.repeats}, OMP_NUM_THREADS={args.threads}; "
-          f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after")
-    engine_after = engine(args.pyoif)
-    print(f"  {engine_before}" + ("" if engine_after == engine_before else
-                                 f"; CHANGED during the measurement, now {engine_after}"))
+    print(header)
     hdr = (f"{'RBCs':>6s} {'N':>6s} {'ranks':>5s} {'s/1000':>8s} {'s/cell':>7s} {'speedup':>7s} {'eff':>5s} "
            f"{'balance':>7s} {'comm ms':>8s} {'halo kB':>8s} {'coupl kB':>8s}  decomposition")
     print(hdr)
@@ -646,17 +694,18 @@ def main():
                                                                     for r in d["ranks"]) / rep["steps"],
                          "halo_bytes_per_update": halo,
                          "coupling_bytes_per_step": coupl, "particle_work_spread": spread,
-                         "resorts_per_step": max(d.get("rebuilds", 1) - 1, 0) / rep["steps"], "lattice_share": d["timings"]["lb_fluid"] /
-                         d["timings"]["total"], "decomposition": dec,
+                         "resorts_per_step": max(d.get("rebuilds", 1) - 1, 0) / rep["steps"],
+                         "lattice_share": d["timings"]["lb_fluid"] / d["timings"]["total"], "decomposition": dec,
                          "paper_one_core_s": PAPER[1].get(n, ""),
                          "paper_ten_cores_s": PAPER[10].get(n, "")})
     for n, why in no_room.items():
         print(f"{n:6d} RBCs: does not fit the sample's seeding region ({why})")
     print("  s/cell: (t(n) - t(0)) / n per 1000 steps (same height); comm: halo + coupling exchanges "
           "per step, waiting included (largest rank); halo kB: sent per lattice update by the busiest rank; "
-          "coupl kB: the coupling's forces received per MD step by a rank: 24 N (K-1)/K (the allgather where every rank "
-          "computes every particle) or 24 per particle whose stencil reaches the rank but whose cell another rank "
-          "owns (\"work spread\": each cell's particles computed by the rank of its first node; busiest rank)")
+          "coupl kB: the coupling's forces received per MD step by a rank: 24 N (K-1)/K (the allgather where "
+          "every rank computes every particle) or 24 per particle whose stencil reaches the rank but whose cell "
+          "another rank owns (\"work spread\": each cell's particles computed by the rank of its first node; "
+          "busiest rank)")
     print("  paper (Table 1, CPU s / 1000 steps, 1 core / 10 cores): "
           + ", ".join(f"{n}: {PAPER[1][n]:.2f} / {PAPER[10][n]:.2f}" for n in sorted(PAPER[1])))
     write_rows(args.csv, rows)
@@ -670,7 +719,7 @@ def main():
         return
     cell_meshes = meshes()
     print()
-    print(f"Model (alpha {ALPHA * 1e6:.1f} us per message, beta {BETA / 1e9:.0f} GB/s; calibrated on the "
+    print(f"Model (alpha {ALPHA * 1e6:.1f} us per {args.latency}, beta {BETA / 1e9:.0f} GB/s; calibrated on the "
           "1-rank run of each count, the coupling's split on the 2-rank run)")
     model_rows = []
     for n in projected:
@@ -707,8 +756,9 @@ def main():
             for scene, loads2 in zip(scenes, weak_loads):
                 loads = rank_loads(grid, solid, scene)
                 for d in DESIGNS:
-                    acc[d].append(step_time(cal, loads, d, P))
-                    acc["weak_" + d].append(step_time(cal, loads2, d, P, weak=True))
+                    acc[d].append(step_time(cal, loads, d, P, per_message=args.latency == "message"))
+                    acc["weak_" + d].append(step_time(cal, loads2, d, P, weak=True,
+                                                      per_message=args.latency == "message"))
             row = {"rbcs": n, "height": h, "ranks": P, "grid": "x".join(map(str, dims))}
             for k, v in acc.items():
                 busy, comm = np.mean(v, axis=0)
