@@ -52,7 +52,9 @@ void System::prepare_step(int moved) {
     cells.update_ghosts(p, box);
     return;
   }
-  if (assigned)
+  // the owners' state to every rank (their assignment holds while the
+  // particles' layout does, whatever else changed since)
+  if (m_spread.layout == p.layout_version && m_spread.owner.size() == n)
     gather_all_particles();
   if (code == 3)
     report_fast_particle(m_time_step);

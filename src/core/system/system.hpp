@@ -237,13 +237,20 @@ private:
     bool stale = false;        ///< copies out of date since the last run
     std::uint64_t version = 0; ///< counts changes of the owned set (membrane cache key)
     std::uint64_t layout = 0, mol = 0, bonds = 0; ///< the versions at the assignment
-    std::array<std::vector<int>, 3> cuts;         ///< the lattice's cuts at the assignment
+    /// per local index the particle whose position decides the owner (a
+    /// cell's first node), and the bonds that can join two owners (count,
+    /// then local indices); for the versions below
+    std::vector<int> reference, cross_bonds;
+    std::uint64_t topology_layout = 0, topology_mol = 0, topology_bonds = ~std::uint64_t{0};
+    std::array<std::vector<int>, 3> cuts; ///< the lattice's cuts at the assignment
   };
   Spread m_spread;
   /** Switches the spread on or off with the fluid (collective). */
   void update_spread();
   /** Every rank sends its particles' state to all (allgather). */
   void gather_all_particles();
+  /** Spread.reference and cross_bonds, when the particles or bonds changed. */
+  void update_topology();
   /** Owners from the current state (all ranks alike), before a re-sort. */
   void assign_owners();
   /** The point-to-point lists, after the re-sort (all ranks alike). */

@@ -88,6 +88,54 @@ void System::gather_all_particles() {
   }
 }
 
+void System::update_topology() {
+  auto& p = particles;
+  if (m_spread.topology_layout == p.layout_version && m_spread.topology_mol == p.mol_version &&
+      m_spread.topology_bonds == m_bonds_version)
+    return;
+  // The reference particle of each particle: a membrane cell's nodes go with
+  // the first particle of the cell's first membrane bond (the cells are
+  // keyed by the mol_id of a bond's first particle); others with themselves.
+  // And the bonds whose particles can have two owners: every generic bond,
+  // and the membrane bonds that join two cells (mol_ids).
+  const std::size_t n = p.n_local();
+  std::unordered_map<int, int> first_node_of_mol;
+  m_spread.cross_bonds.clear();
+  for (const BondedEntry& entry : bonded)
+    std::visit(
+        [&](const auto& ia) {
+          using IA = std::decay_t<decltype(ia)>;
+          const BondGroup& g = entry.bonds;
+          for (std::size_t b = 0; b < g.size(); ++b) {
+            const int* ids = g.bond(b);
+            const int first = p.index(ids[0]);
+            bool cross = !is_membrane_bond<IA>;
+            if constexpr (is_membrane_bond<IA>)
+              if (first >= 0) {
+                first_node_of_mol.try_emplace(p.mol_id[first], first);
+                for (int k = 1; k < g.n_particles; ++k) {
+                  const int i = p.index(ids[k]);
+                  cross |= i >= 0 && p.mol_id[i] != p.mol_id[first];
+                }
+              }
+            if (!cross)
+              continue;
+            m_spread.cross_bonds.push_back(g.n_particles);
+            for (int k = 0; k < g.n_particles; ++k)
+              m_spread.cross_bonds.push_back(std::max(0, p.index(ids[k])));
+          }
+        },
+        entry.interaction);
+  m_spread.reference.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto it = first_node_of_mol.find(p.mol_id[i]);
+    m_spread.reference[i] = it != first_node_of_mol.end() ? it->second : static_cast<int>(i);
+  }
+  m_spread.topology_layout = p.layout_version;
+  m_spread.topology_mol = p.mol_version;
+  m_spread.topology_bonds = m_bonds_version;
+}
+
 void System::assign_owners() {
   auto& p = particles;
   const std::size_t n = p.n_local();
@@ -103,28 +151,12 @@ void System::assign_owners() {
     }
     return g;
   };
-  // a membrane cell's nodes go with the first node of its first bond (the
-  // cells are keyed by the mol_id of a bond's first particle)
-  std::unordered_map<int, int> first_node_of_mol;
-  for (const BondedEntry& entry : bonded)
-    std::visit(
-        [&](const auto& ia) {
-          using IA = std::decay_t<decltype(ia)>;
-          if constexpr (is_membrane_bond<IA>)
-            for (std::size_t b = 0; b < entry.bonds.size(); ++b) {
-              const int i = p.index(entry.bonds.bond(b)[0]);
-              if (i >= 0)
-                first_node_of_mol.try_emplace(p.mol_id[i], i);
-            }
-        },
-        entry.interaction);
+  update_topology();
   const std::vector<std::uint8_t> owned_before = m_spread.owned;
   m_spread.owner.assign(n, 0);
   m_spread.owned.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    const auto it = first_node_of_mol.find(p.mol_id[i]);
-    const std::size_t ref =
-        it != first_node_of_mol.end() ? static_cast<std::size_t>(it->second) : i;
+    const int ref = m_spread.reference[i];
     m_spread.owner[i] = grid.owner_of(node_of(p.pos[ref]));
     m_spread.owned[i] = m_spread.owner[i] == me;
   }
@@ -187,19 +219,16 @@ void System::build_exchange_lists() {
     needs(m_spread.owner[a], b);
     needs(m_spread.owner[b], a);
   }
-  // (3) bonds between particles of different owners (each owner evaluates
+  // (3) bonds that can join particles of two owners (each owner evaluates
   // the bond for its own particles)
-  for (const BondedEntry& entry : bonded) {
-    const BondGroup& g = entry.bonds;
-    for (std::size_t b = 0; b < g.size(); ++b) {
-      const int* ids = g.bond(b);
-      for (int k = 0; k < g.n_particles; ++k)
-        for (int l = 0; l < g.n_particles; ++l) {
-          const int ik = p.index(ids[k]), il = p.index(ids[l]);
-          if (k != l && ik >= 0 && il >= 0 && m_spread.owner[ik] != m_spread.owner[il])
-            needs(m_spread.owner[ik], il);
-        }
-    }
+  for (std::size_t start = 0; start < m_spread.cross_bonds.size();) {
+    const int k = m_spread.cross_bonds[start];
+    const int* idx = m_spread.cross_bonds.data() + start + 1;
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b < k; ++b)
+        if (a != b && m_spread.owner[idx[a]] != m_spread.owner[idx[b]])
+          needs(m_spread.owner[idx[a]], idx[b]);
+    start += 1 + static_cast<std::size_t>(k);
   }
   m_spread.peers.clear();
   m_spread.current = m_spread.owned;
