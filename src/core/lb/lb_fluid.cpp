@@ -553,14 +553,18 @@ int block_components(const std::string& prop) {
 }
 } // namespace
 
-std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
-                                       const Vec3i& hi) const {
-  const int nc = block_components(prop);
+void LBFluid::check_block(const Vec3i& lo, const Vec3i& hi) const {
   for (int d = 0; d < 3; ++d)
     if (lo[d] < 0 || hi[d] > m_global[d] || lo[d] >= hi[d])
       throw InputError("lattice node block [" + std::to_string(lo[d]) + ", " +
                        std::to_string(hi[d]) + ") on axis " + std::to_string(d) +
                        " is empty or outside [0, " + std::to_string(m_global[d]) + ")");
+}
+
+std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
+                                       const Vec3i& hi) const {
+  const int nc = block_components(prop);
+  check_block(lo, hi);
   const Vec3i n = hi - lo;
   // each rank fills the nodes it owns, zeros elsewhere; the sum over the
   // ranks is then every value exactly (x + 0 = x)
@@ -600,11 +604,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
   const int nc = block_components(prop);
   if (prop != "velocity" && prop != "density" && prop != "population")
     throw InputError(prop + " is read-only");
-  for (int d = 0; d < 3; ++d)
-    if (lo[d] < 0 || hi[d] > m_global[d] || lo[d] >= hi[d])
-      throw InputError("lattice node block [" + std::to_string(lo[d]) + ", " +
-                       std::to_string(hi[d]) + ") on axis " + std::to_string(d) +
-                       " is empty or outside [0, " + std::to_string(m_global[d]) + ")");
+  check_block(lo, hi);
   const Vec3i n = hi - lo;
   if (values.size() != static_cast<std::size_t>(n.prod()) * nc)
     throw InputError(prop + ": expected " + std::to_string(nc) + " value(s) per node for " +

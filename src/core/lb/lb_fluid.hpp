@@ -360,6 +360,8 @@ private:
   }
   /** Throws InputError for a node outside [0, N); returns owned_index(node). */
   std::size_t checked_node(const Vec3i& node) const;
+  /** Throws InputError unless lo <= node < hi is a non-empty block of the lattice. */
+  void check_block(const Vec3i& lo, const Vec3i& hi) const;
   /** Flags of this rank's padded nodes (ghosts too) for these boundaries. */
   std::vector<std::uint16_t> flags_for(const std::vector<BoundarySpec>& boundaries) const;
   /** Allocates the populations (rest state at dens) and flags for the grid's subdomain. */
