@@ -46,8 +46,8 @@ std::vector<lb::BoundarySpec> channel_with_post() {
   std::vector<lb::BoundarySpec> b;
   b.push_back({std::make_shared<shapes::Wall>(Vec3(0, 1, 0), 1.5), Vec3::Zero()});
   b.push_back({std::make_shared<shapes::Wall>(Vec3(0, -1, 0), -10.5), Vec3(0.01, 0, 0)});
-  b.push_back({std::make_shared<shapes::Cylinder>(Vec3(12, 6, 5), Vec3(0, 0, 1), 2.5, 20.0),
-               Vec3::Zero()});
+  b.push_back(
+      {std::make_shared<shapes::Cylinder>(Vec3(12, 6, 5), Vec3(0, 0, 1), 2.5, 20.0), Vec3::Zero()});
   return b;
 }
 
