@@ -18,6 +18,7 @@
 #include "utils/errors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -156,8 +157,11 @@ void System::assign_owners() {
   m_spread.owner.assign(n, 0);
   m_spread.owned.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
+    // a cell's nodes follow its reference, looked up once per cell (the
+    // reference is its own reference, and comes first in its cell)
     const int ref = m_spread.reference[i];
-    m_spread.owner[i] = grid.owner_of(node_of(p.pos[ref]));
+    m_spread.owner[i] = static_cast<std::size_t>(ref) < i ? m_spread.owner[ref]
+                                                          : grid.owner_of(node_of(p.pos[ref]));
     m_spread.owned[i] = m_spread.owner[i] == me;
   }
   // the membranes compile this rank's cells anew only when they changed
@@ -192,24 +196,29 @@ void System::build_exchange_lists() {
   // the next re-sort (a particle moves at most skin / 2 until then)
   const double reach = 0.5 * cells.skin;
   const auto& cuts = grid.cuts();
+  std::array<std::vector<int>, 3> coords; // grid coordinates the stencil reaches, per axis
   for (std::size_t i = 0; i < n; ++i) {
-    int coords[3][4], count[3] = {0, 0, 0};
     for (int d = 0; d < 3; ++d) {
+      coords[d].clear();
+      if (grid.dims()[d] == 1) {
+        coords[d].push_back(0);
+        continue;
+      }
       const int lo = static_cast<int>(std::floor((p.pos[i][d] - reach) / agrid - 0.5));
       const int hi = static_cast<int>(std::floor((p.pos[i][d] + reach) / agrid - 0.5)) + 1;
-      for (int g = lo; g <= hi && count[d] < 4; ++g) {
+      for (int g = lo; g <= hi; ++g) {
         const int w = ((g % nodes[d]) + nodes[d]) % nodes[d];
         const int c = static_cast<int>(std::upper_bound(cuts[d].begin(), cuts[d].end(), w) -
                                        cuts[d].begin()) -
                       1;
-        if (std::find(coords[d], coords[d] + count[d], c) == coords[d] + count[d])
-          coords[d][count[d]++] = c;
+        if (std::find(coords[d].begin(), coords[d].end(), c) == coords[d].end())
+          coords[d].push_back(c);
       }
     }
-    for (int x = 0; x < count[0]; ++x)
-      for (int y = 0; y < count[1]; ++y)
-        for (int z = 0; z < count[2]; ++z)
-          needs(grid.rank_of(Vec3i(coords[0][x], coords[1][y], coords[2][z])), static_cast<int>(i));
+    for (const int x : coords[0])
+      for (const int y : coords[1])
+        for (const int z : coords[2])
+          needs(grid.rank_of(Vec3i(x, y, z)), static_cast<int>(i));
   }
   // (2) pair contacts (the pair list, built from the current state, holds
   // every pair with a particle of this rank within range + skin until the
