@@ -27,7 +27,7 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
 }
 
 void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut,
-                         const std::uint8_t* owned) {
+                         const std::uint8_t* owned, const std::uint8_t* current) {
   m_blowup_distance = box.image_range();
   for (std::size_t i = 0; i < p.n_local(); ++i)
     box.fold(p.pos[i], p.image[i]);
@@ -44,15 +44,17 @@ void CellSystem::rebuild(ParticleStore& p, const BoxGeometry& box, double max_cu
             << "; enlarge the box or reduce the cutoffs or cell_system.skin";
         throw InputError(msg.str());
       }
-    make_ghosts(p, box, m_range);
+    make_ghosts(p, box, m_range, current);
     p.ghost_force.assign(p.n_ghost(), Vec3::Zero());
-    build_pairs(p, m_range, owned);
+    build_pairs(p, m_range, owned, current);
   }
   m_valid = true;
+  m_has_hint = false;
   ++m_n_rebuilds;
 }
 
-void CellSystem::make_ghosts(ParticleStore& p, const BoxGeometry& box, double range) const {
+void CellSystem::make_ghosts(ParticleStore& p, const BoxGeometry& box, double range,
+                             const std::uint8_t* current) const {
   // Axis by axis, imaging locals and the ghosts made so far, so edges and
   // corners get their images too.
   for (int d = 0; d < 3; ++d) {
@@ -61,8 +63,10 @@ void CellSystem::make_ghosts(ParticleStore& p, const BoxGeometry& box, double ra
     const double L = box.length()[d];
     const std::size_t n_sources = p.n_local() + p.n_ghost();
     for (std::size_t i = 0; i < n_sources; ++i) {
-      const Vec3 x = p.position(i);
       const int origin = p.owner(i);
+      if (current && !current[origin])
+        continue; // an out-of-date copy (particles spread over ranks)
+      const Vec3 x = p.position(i);
       const Vec3i base = i < p.n_local() ? Vec3i::Zero() : p.ghost_shift[i - p.n_local()];
       for (int s : {+1, -1}) {
         const bool near_face = (s > 0) ? (x[d] < range) : (x[d] >= L - range);
@@ -115,17 +119,29 @@ void CellSystem::build_exclusion_lists() {
   m_exclusion_lists_valid = true;
 }
 
-void CellSystem::build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned) {
+void CellSystem::build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned,
+                             const std::uint8_t* current) {
   if (!m_exclusion_lists_valid && !m_exclusions.empty())
     build_exclusion_lists();
   const std::size_t n_local = p.n_local();
   const std::size_t n_all = n_local + p.n_ghost();
   if (n_all == 0)
     return;
-  Vec3 lo = p.position(0), hi = p.position(0);
-  for (std::size_t i = 1; i < n_all; ++i) {
-    lo = lo.cwiseMin(p.position(i));
-    hi = hi.cwiseMax(p.position(i));
+  // (particles spread over ranks: out-of-date copies are left out)
+  auto binned = [&](std::size_t i) { return !current || current[p.owner(i)]; };
+  Vec3 lo = Vec3::Constant(HUGE_VAL), hi = Vec3::Constant(-HUGE_VAL);
+  for (std::size_t i = 0; i < n_all; ++i)
+    if (binned(i)) {
+      lo = lo.cwiseMin(p.position(i));
+      hi = hi.cwiseMax(p.position(i));
+    }
+  if (!(lo[0] <= hi[0]))
+    return;                   // nothing to bin
+  std::size_t n_grid = n_all; // the particles the grid is made for
+  if (m_has_hint) {
+    lo = m_hint.lo;
+    hi = m_hint.hi;
+    n_grid = m_hint.n_all;
   }
   // Cells of at least `range` per side, at most ~2 per particle.
   std::array<int, 3> nc;
@@ -137,7 +153,7 @@ void CellSystem::build_pairs(const ParticleStore& p, double range, const std::ui
       nc[d] = std::max(1, static_cast<int>(std::floor((hi[d] - lo[d]) / size)));
       total *= nc[d];
     }
-    if (total <= static_cast<long>(2 * n_all + 27))
+    if (total <= static_cast<long>(2 * n_grid + 27))
       break;
     size *= 1.26;
   }
@@ -150,6 +166,10 @@ void CellSystem::build_pairs(const ParticleStore& p, double range, const std::ui
   std::vector<int> cell_of(n_all);
   m_cell_start.assign(n_cells + 1, 0);
   for (std::size_t i = 0; i < n_all; ++i) {
+    if (!binned(i)) {
+      cell_of[i] = -1;
+      continue;
+    }
     const Vec3& x = p.position(i);
     const int c = (cell_coord(x, 2) * nc[1] + cell_coord(x, 1)) * nc[0] + cell_coord(x, 0);
     cell_of[i] = c;
@@ -161,7 +181,8 @@ void CellSystem::build_pairs(const ParticleStore& p, double range, const std::ui
   {
     std::vector<int> fill(m_cell_start.begin(), m_cell_start.end() - 1);
     for (std::size_t i = 0; i < n_all; ++i)
-      m_cell_particles[fill[cell_of[i]]++] = static_cast<int>(i);
+      if (cell_of[i] >= 0)
+        m_cell_particles[fill[cell_of[i]]++] = static_cast<int>(i);
   }
   // spread over ranks: the cells holding a particle (or image) this rank
   // owns; a pair of cells without one is skipped
@@ -169,7 +190,8 @@ void CellSystem::build_pairs(const ParticleStore& p, double range, const std::ui
   if (owned) {
     has_owned.assign(n_cells, 0);
     for (std::size_t i = 0; i < n_all; ++i)
-      has_owned[cell_of[i]] |= owned[p.owner(i)];
+      if (cell_of[i] >= 0)
+        has_owned[cell_of[i]] |= owned[p.owner(i)];
   }
 
   const double range2 = range * range;

@@ -27,9 +27,11 @@ public:
 
   /** Fold, make ghosts, bin, build the pair list for interaction range max_cut.
    *  With owned (per local index; particles spread over MPI ranks) only the
-   *  pairs with a particle this rank owns, in the order of the full list. */
+   *  pairs with a particle this rank owns, in the order of the full list;
+   *  with current, only the particles marked there (whose positions this
+   *  rank holds up to date) are binned and imaged. */
   void rebuild(ParticleStore& p, const BoxGeometry& box, double max_cut,
-               const std::uint8_t* owned = nullptr);
+               const std::uint8_t* owned = nullptr, const std::uint8_t* current = nullptr);
   /** True when some particle moved more than skin/2 since the last re-sort or
    *  the structure was invalidated. Throws SimulationInstability on a
    *  non-finite position. */
@@ -51,6 +53,18 @@ public:
            (x.cwiseAbs().array() > m_blowup_distance.array()).any();
   }
   void invalidate() { m_valid = false; }
+  /** The cell grid of the next rebuild as if made from all particles and
+   *  their images (bounding box lo..hi, n_all of them): a rank that bins
+   *  only some of them (particles spread over ranks) gets the grid, and so
+   *  the pair orientations, of the full list. Used once. */
+  struct GridHint {
+    Vec3 lo, hi;
+    std::size_t n_all = 0;
+  };
+  void set_grid_hint(const GridHint& hint) {
+    m_hint = hint;
+    m_has_hint = true;
+  }
   /** Refresh ghost positions from their origins (MPI: ghost exchange). */
   void update_ghosts(ParticleStore& p, const BoxGeometry& box) const;
   /** Add the forces accumulated on ghosts to their owners (MPI: reverse exchange). */
@@ -106,12 +120,16 @@ private:
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
            static_cast<std::uint32_t>(b);
   }
-  void make_ghosts(ParticleStore& p, const BoxGeometry& box, double range) const;
-  void build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned);
+  void make_ghosts(ParticleStore& p, const BoxGeometry& box, double range,
+                   const std::uint8_t* current) const;
+  void build_pairs(const ParticleStore& p, double range, const std::uint8_t* owned,
+                   const std::uint8_t* current);
   /** The exclusions as sorted partner lists per id (both directions). */
   void build_exclusion_lists();
 
   bool m_valid = false;
+  GridHint m_hint;
+  bool m_has_hint = false;
   double m_range = 0.0;
   Vec3 m_blowup_distance = Vec3::Constant(1e300); ///< per axis (BoxGeometry::image_range)
   std::size_t m_n_rebuilds = 0;

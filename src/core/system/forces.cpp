@@ -52,6 +52,12 @@ void System::prepare_step(int moved) {
     cells.update_ghosts(p, box);
     return;
   }
+  if (code == 1 && assigned) {
+    // the usual re-sort: particles moved, nothing else changed
+    m_spread.stale = true; // copies out of reach stay out of date
+    resort_spread();
+    return;
+  }
   // the owners' state to every rank (their assignment holds while the
   // particles' layout does, whatever else changed since)
   if (m_spread.layout == p.layout_version && m_spread.owner.size() == n)
@@ -61,6 +67,7 @@ void System::prepare_step(int moved) {
   if (code == 2)
     cells.needs_rebuild(p, time); // names the runaway particle
   assign_owners();
+  m_spread.binned.clear(); // every copy current
   cells.rebuild(p, box, nonbonded.max_range(), m_spread.owned.data());
   build_exchange_lists();
 }

@@ -241,6 +241,9 @@ private:
     /// cell's first node), and the bonds that can join two owners (count,
     /// then local indices); for the versions below
     std::vector<int> reference, cross_bonds;
+    /// at the last re-sort: the particles whose state this rank held
+    /// current (owned, and within reach; empty after a full gather: all)
+    std::vector<std::uint8_t> binned;
     std::uint64_t topology_layout = 0, topology_mol = 0, topology_bonds = ~std::uint64_t{0};
     std::array<std::vector<int>, 3> cuts; ///< the lattice's cuts at the assignment
   };
@@ -253,8 +256,11 @@ private:
   void update_topology();
   /** Owners from the current state (all ranks alike), before a re-sort. */
   void assign_owners();
-  /** The point-to-point lists, after the re-sort (all ranks alike). */
+  /** The point-to-point lists, after the re-sort. */
   void build_exchange_lists();
+  /** A re-sort that moves only the particles that change owner and those
+   *  within reach of other ranks (no gather of all). */
+  void resort_spread();
   /** Sends the owners' positions and velocities (or normals) to the ranks
    *  that keep copies. */
   void exchange_current(bool normals);

@@ -198,6 +198,8 @@ void System::build_exchange_lists() {
   const auto& cuts = grid.cuts();
   std::array<std::vector<int>, 3> coords; // grid coordinates the stencil reaches, per axis
   for (std::size_t i = 0; i < n; ++i) {
+    if (!m_spread.binned.empty() && !m_spread.binned[i])
+      continue; // no current position here: neither this rank's nor needed by it
     for (int d = 0; d < 3; ++d) {
       coords[d].clear();
       if (grid.dims()[d] == 1) {
@@ -252,6 +254,227 @@ void System::build_exchange_lists() {
       m_spread.current[i] = 1;
     m_spread.peers.push_back({r, std::move(send[r]), std::move(recv[r]), {}, {}});
   }
+}
+
+void System::resort_spread() {
+  // A re-sort without the gather of all particles: the owners decide, from
+  // their own particles' current state, (1) the new owners (shared in one
+  // allgather of the changes only), (2) the moves of particles to their new
+  // owners, (3) which ranks hold each particle within reach: the rank's
+  // lattice box widened by the largest cell's extent, the pair range and
+  // the skin (every particle a rank's particles can meet before the next
+  // re-sort, and every particle whose coupling stencil can reach its
+  // subdomain). Each rank then bins what it holds current, builds its pairs
+  // and lists from that, and the lists' copies are refreshed once.
+  auto& p = particles;
+  const std::size_t n = p.n_local();
+  const DomainGrid& grid = m_lb->domain();
+  const int me = m_spread.comm.rank(), size = m_spread.comm.size();
+  const MPI_Comm comm = m_spread.comm.comm();
+  const double agrid = m_lb->agrid();
+  const Vec3i nodes = m_lb->grid();
+  auto node_of = [&](const Vec3& x) {
+    const Vec3 f = box.folded(x);
+    Vec3i g;
+    for (int d = 0; d < 3; ++d)
+      g[d] = std::min(std::max(static_cast<int>(std::floor(f[d] / agrid)), 0), nodes[d] - 1);
+    return g;
+  };
+  constexpr int per = 15; // position, image, velocity, force, normal
+  auto pack = [&](std::vector<double>& out, std::size_t i) {
+    const Vec3 img = p.image[i].cast<double>();
+    const Vec3* fields[5] = {&p.pos[i], &img, &p.vel[i], &p.force[i], &p.normal[i]};
+    for (const Vec3* v : fields)
+      out.insert(out.end(), {(*v)[0], (*v)[1], (*v)[2]});
+  };
+  auto unpack = [&](const double* v, std::size_t i) {
+    p.pos[i] = Vec3(v[0], v[1], v[2]);
+    p.image[i] = Vec3i(static_cast<int>(v[3]), static_cast<int>(v[4]), static_cast<int>(v[5]));
+    p.vel[i] = Vec3(v[6], v[7], v[8]);
+    p.force[i] = Vec3(v[9], v[10], v[11]);
+    p.normal[i] = Vec3(v[12], v[13], v[14]);
+  };
+  // (1) new owners of this rank's particles (a cell follows its reference,
+  // which this rank owns too), the changes to every rank
+  std::vector<int> changes; // pairs (index, new owner)
+  double extent2 = 0.0;     // the largest squared distance of a node from its reference
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!m_spread.owned[i])
+      continue;
+    const int ref = m_spread.reference[i];
+    const int new_owner = grid.owner_of(node_of(p.pos[ref]));
+    extent2 = std::max(extent2, box.minimum_image(p.pos[i], p.pos[ref]).squaredNorm());
+    if (new_owner != me)
+      changes.insert(changes.end(), {static_cast<int>(i), new_owner});
+  }
+  std::vector<int> counts(size), displs(size, 0);
+  const int mine = static_cast<int>(changes.size());
+  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (int r = 1; r < size; ++r)
+    displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<int> all_changes(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  MPI_Allgatherv(changes.data(), mine, MPI_INT, all_changes.data(), counts.data(), displs.data(),
+                 MPI_INT, comm);
+  // (2) the moving particles' state to their new owners, in the order of
+  // the list (both sides know it)
+  std::vector<std::vector<double>> to(size), from(size);
+  std::vector<std::vector<int>> arriving(size);
+  for (int r = 0; r < size; ++r)
+    for (int k = displs[r]; k < displs[r] + counts[r]; k += 2) {
+      const int i = all_changes[k], dest = all_changes[k + 1];
+      if (r == me)
+        pack(to[dest], static_cast<std::size_t>(i));
+      if (dest == me)
+        arriving[r].push_back(i);
+    }
+  std::vector<MPI_Request> requests;
+  for (int r = 0; r < size; ++r) {
+    if (arriving[r].empty())
+      continue;
+    from[r].resize(per * arriving[r].size());
+    requests.emplace_back();
+    MPI_Irecv(from[r].data(), static_cast<int>(from[r].size()), MPI_DOUBLE, r, 83, comm,
+              &requests.back());
+  }
+  for (int r = 0; r < size; ++r) {
+    if (to[r].empty())
+      continue;
+    requests.emplace_back();
+    MPI_Isend(to[r].data(), static_cast<int>(to[r].size()), MPI_DOUBLE, r, 83, comm,
+              &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  for (int r = 0; r < size; ++r)
+    for (std::size_t k = 0; k < arriving[r].size(); ++k)
+      unpack(from[r].data() + per * k, static_cast<std::size_t>(arriving[r][k]));
+  for (std::size_t k = 0; k < all_changes.size(); k += 2)
+    m_spread.owner[all_changes[k]] = all_changes[k + 1];
+  for (std::size_t i = 0; i < n; ++i)
+    m_spread.owned[i] = m_spread.owner[i] == me;
+  if (!all_changes.empty())
+    ++m_spread.version;
+  // (3) each owned particle to the ranks whose widened box holds it
+  double extent = std::sqrt(extent2);
+  MPI_Allreduce(MPI_IN_PLACE, &extent, 1, MPI_DOUBLE, MPI_MAX, comm);
+  const double margin = extent + nonbonded.max_range() + cells.skin + 2.0 * agrid;
+  const Vec3& L = box.length();
+  const auto& cuts = grid.cuts();
+  std::array<std::vector<int>, 3> coords;
+  std::vector<std::vector<double>> out(size);
+  std::vector<std::vector<int>> out_index(size);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!m_spread.owned[i])
+      continue;
+    const Vec3 x = box.folded(p.pos[i]);
+    for (int d = 0; d < 3; ++d) {
+      coords[d].clear();
+      for (int c = 0; c < grid.dims()[d]; ++c) {
+        if (grid.dims()[d] == 1) {
+          coords[d].push_back(c);
+          break;
+        }
+        const double a = cuts[d][c] * agrid - margin, b = cuts[d][c + 1] * agrid + margin;
+        if ((x[d] >= a && x[d] < b) || (x[d] + L[d] >= a && x[d] + L[d] < b) ||
+            (x[d] - L[d] >= a && x[d] - L[d] < b))
+          coords[d].push_back(c);
+      }
+    }
+    for (const int cx : coords[0])
+      for (const int cy : coords[1])
+        for (const int cz : coords[2]) {
+          const int r = grid.rank_of(Vec3i(cx, cy, cz));
+          if (r == me)
+            continue;
+          out_index[r].push_back(static_cast<int>(i));
+          pack(out[r], i);
+        }
+  }
+  std::vector<int> send_counts(size), recv_counts(size);
+  for (int r = 0; r < size; ++r)
+    send_counts[r] = static_cast<int>(out_index[r].size());
+  MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm);
+  std::vector<std::vector<int>> in_index(size);
+  std::vector<std::vector<double>> in(size);
+  requests.clear();
+  for (int r = 0; r < size; ++r) {
+    if (!recv_counts[r])
+      continue;
+    in_index[r].resize(recv_counts[r]);
+    in[r].resize(static_cast<std::size_t>(per) * recv_counts[r]);
+    requests.emplace_back();
+    MPI_Irecv(in_index[r].data(), recv_counts[r], MPI_INT, r, 84, comm, &requests.back());
+    requests.emplace_back();
+    MPI_Irecv(in[r].data(), static_cast<int>(in[r].size()), MPI_DOUBLE, r, 85, comm,
+              &requests.back());
+  }
+  for (int r = 0; r < size; ++r) {
+    if (!send_counts[r])
+      continue;
+    requests.emplace_back();
+    MPI_Isend(out_index[r].data(), send_counts[r], MPI_INT, r, 84, comm, &requests.back());
+    requests.emplace_back();
+    MPI_Isend(out[r].data(), static_cast<int>(out[r].size()), MPI_DOUBLE, r, 85, comm,
+              &requests.back());
+  }
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  m_spread.binned = m_spread.owned;
+  for (int r = 0; r < size; ++r)
+    for (std::size_t k = 0; k < in_index[r].size(); ++k) {
+      const std::size_t i = static_cast<std::size_t>(in_index[r][k]);
+      unpack(in[r].data() + per * k, i);
+      m_spread.binned[i] = 1;
+    }
+  // (4) the pairs among what this rank holds, on the cell grid of the full
+  // list (the bounding box of all particles and their periodic images, and
+  // their count: the same pair orientations, so the same forces and each
+  // pair's energy counted once), the lists, the copies once
+  const double range = nonbonded.max_range() > 0.0 ? nonbonded.max_range() + cells.skin : 0.0;
+  if (range > 0.0) {
+    double extremes[6];
+    for (int d = 0; d < 3; ++d) {
+      extremes[d] = HUGE_VAL;      // -lo, by MAX
+      extremes[3 + d] = -HUGE_VAL; // hi
+    }
+    double images = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!m_spread.owned[i])
+        continue;
+      const Vec3 x = box.folded(p.pos[i]);
+      double copies = 1.0;
+      for (int d = 0; d < 3; ++d) {
+        double lo = x[d], hi = x[d];
+        int per_axis = 1;
+        if (box.periodic()[d]) {
+          if (x[d] < range) {
+            hi = std::max(hi, x[d] + L[d]);
+            ++per_axis;
+          }
+          if (x[d] >= L[d] - range) {
+            lo = std::min(lo, x[d] - L[d]);
+            ++per_axis;
+          }
+        }
+        extremes[d] = std::min(extremes[d], lo);
+        extremes[3 + d] = std::max(extremes[3 + d], hi);
+        copies *= per_axis;
+      }
+      images += copies - 1.0;
+    }
+    for (int d = 0; d < 3; ++d)
+      extremes[d] = -extremes[d];
+    MPI_Allreduce(MPI_IN_PLACE, extremes, 6, MPI_DOUBLE, MPI_MAX, comm);
+    double total = images + static_cast<double>(n);
+    MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_DOUBLE, MPI_SUM, comm);
+    // (every particle is owned by exactly one rank: n counted once, as the
+    // sum of the owned ones; images summed over their owners)
+    total -= static_cast<double>(n) * (size - 1);
+    cells.set_grid_hint({Vec3(-extremes[0], -extremes[1], -extremes[2]),
+                         Vec3(extremes[3], extremes[4], extremes[5]),
+                         static_cast<std::size_t>(total)});
+  }
+  cells.rebuild(p, box, nonbonded.max_range(), m_spread.owned.data(), m_spread.binned.data());
+  build_exchange_lists();
+  exchange_current(false);
 }
 
 void System::exchange_current(bool normals) {
