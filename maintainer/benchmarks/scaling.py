@@ -83,8 +83,11 @@ allreduce 2 ceil(log2 P) alpha:
       forces to the owners; 96 bytes per copy, a copy being a particle
       within 1.3 um (largest cutoff + skin) of the subdomain whose cell
       another rank owns), 2 allreduces (the agreement on re-sorts and on
-      errors), and per re-sort an allgather of 15 doubles per particle,
-      120 N (P-1)/P bytes;
+      errors), and per re-sort an allgather of the owner changes, an
+      all-to-all of counts, one round of the particles within reach of
+      other ranks (120 bytes each, about 6 times the copies: a cell's
+      extent widens the reach) and a pass of 5 ns over every stored
+      particle (storage replicated: N per rank, P N in weak scaling);
   owned: 2 rounds of particle ghosts (positions out, forces back: 48 bytes
       per particle within 1.3 um outside the subdomain) and the (b) cell
       exchange of ownership_model.py (72 bytes per node of a cell held by
@@ -103,7 +106,8 @@ copies side by side along x (the grid with the least halo), so a rank's
 subdomain is one copy with two x neighbours; efficiency t(1)/t(P). Where
 storage is replicated every rank holds all P N particles: replicated
 computes all of them (M, O, c_rep P-fold, the allgather 24 N (P-1) bytes),
-spread gathers them all at every re-sort (120 N (P-1) bytes). Cells are
+spread passes over them all at every re-sort (before ca75f14 it also
+gathered them all, 120 N (P-1) bytes). Cells are
 placed as ownership_model.py places them (uniform centres in the channel,
 random orientation, no overlap test; --seeds placements averaged): spread
 over the channel as in a long run, not the seeding's cluster. The model
@@ -148,6 +152,7 @@ PAPER = {1: {0: 48.14, 5: 55.90, 10: 62.68, 20: 84.37, 40: 145.00, 60: 242.47},
 
 # the designs the model projects (module docstring)
 DESIGNS = ("replicated", "spread", "owned")
+RESORT_PASS_S = 5e-9  # seconds per stored particle and re-sort (folding, masks, lists)
 
 # D3Q19 velocities less the rest one
 D3Q19 = [c for c in ((x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1))
@@ -448,7 +453,15 @@ def step_time(cal, loads, design, P, weak=False, per_message=True):
             return busy, 0.0
         p2p = rounds(3) + 96.0 * loads["copies"][pick].max() / BETA
         collectives = 2 * 2 * log_p * ALPHA
-        resort = cal["rebuilds"] * (log_p * ALPHA + 120.0 * n_all * (P - 1) / P / BETA)
+        # per re-sort (since ca75f14 no gather of all particles): the
+        # owner changes (an allgather of a few ints), the counts (an
+        # all-to-all), one round of the particles within reach of other
+        # ranks (120 bytes each: the copies within 1.3 um, times the wider
+        # reach of a cell's extent, about 6), and a pass over every stored
+        # particle (about 5 ns each: storage is replicated)
+        reach = 6.0 * loads["copies"][pick].max()
+        resort = cal["rebuilds"] * (2 * log_p * ALPHA + rounds(1) + 120.0 * reach / BETA
+                                    + RESORT_PASS_S * n_all)
         return busy, lattice + p2p + collectives + resort
     busy = (L * Fr / F + (c_rep + c_div) * np.minimum(Sr / N, 1.0) + M * Vr / V + O * Nr / N).max()
     if P == 1:
