@@ -201,8 +201,9 @@ public:
   // of its cell's first node (a whole cell on one rank, with the membrane
   // driver's lanes), or of its own position. The other ranks' copies are
   // kept current only where needed (coupling stencils, pair contacts,
-  // bonds across ranks), point to point every step; all copies are made
-  // current at every re-sort of the cell system and before a query.
+  // bonds across ranks), point to point every step; at a re-sort the owners
+  // send their particles to the ranks within reach (resort_spread), and all
+  // copies are made current before a query (synchronize).
   /** Whether the particles are spread over the ranks. */
   bool particles_spread() const { return m_spread.active; }
   /** Collective: makes every rank's copy of every particle current (before

@@ -9,10 +9,12 @@
 // sent to the owner. A rank that needs another rank's particle (its coupling
 // stencil reaches the rank's subdomain, a pair contact or a bond with one of
 // its particles) gets its position and velocity every step, and its normal
-// after the membrane phase. At every re-sort of the cell system all copies
-// are made current (one allgather of each rank's particles), and the owners
-// and lists are derived from that state by every rank alike, so no rank has
-// to tell another what it needs.
+// after the membrane phase. At a re-sort of the cell system the owners send
+// their particles to the ranks within reach (resort_spread), every rank
+// builds its pairs on the grid of the full list, and the lists follow from
+// what both sides of a pair see alike, so no rank has to tell another what
+// it needs. Before queries, and after the particles, bonds or cuts changed,
+// all copies are made current (one allgather of each rank's particles).
 #include "system/system.hpp"
 
 #include "utils/errors.hpp"
