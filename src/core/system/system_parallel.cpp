@@ -26,6 +26,25 @@
 
 namespace pyoif {
 
+namespace {
+/** A particle's whole state as 15 numbers: position, image, velocity,
+ *  force, normal (what a rank needs to take a particle over). */
+constexpr int state_numbers = 15;
+void pack_state(const ParticleStore& p, std::size_t i, std::vector<double>& out) {
+  const Vec3 img = p.image[i].cast<double>();
+  const Vec3* fields[5] = {&p.pos[i], &img, &p.vel[i], &p.force[i], &p.normal[i]};
+  for (const Vec3* v : fields)
+    out.insert(out.end(), {(*v)[0], (*v)[1], (*v)[2]});
+}
+void unpack_state(ParticleStore& p, std::size_t i, const double* v) {
+  p.pos[i] = Vec3(v[0], v[1], v[2]);
+  p.image[i] = Vec3i(static_cast<int>(v[3]), static_cast<int>(v[4]), static_cast<int>(v[5]));
+  p.vel[i] = Vec3(v[6], v[7], v[8]);
+  p.force[i] = Vec3(v[9], v[10], v[11]);
+  p.normal[i] = Vec3(v[12], v[13], v[14]);
+}
+} // namespace
+
 void System::update_spread() {
   const bool spread = m_lb && m_lb->distributed();
   if (spread == m_spread.active)
@@ -50,10 +69,10 @@ void System::synchronize() {
 }
 
 void System::gather_all_particles() {
-  // 15 numbers per particle: position, image, velocity, force, normal, in
-  // local-index order from each owner; particles without an owner (added
-  // since) are current everywhere already
-  constexpr int per = 15;
+  // every particle's state (pack_state) in local-index order from its
+  // owner; particles without an owner (added since) are current everywhere
+  // already
+  constexpr int per = state_numbers;
   const int size = m_spread.comm.size(), me = m_spread.comm.rank();
   auto& p = particles;
   const std::size_t n = p.n_local();
@@ -65,12 +84,8 @@ void System::gather_all_particles() {
     if (o < 0)
       continue;
     counts[o] += per;
-    if (o == me) {
-      const Vec3 img = p.image[i].cast<double>();
-      const Vec3* fields[5] = {&p.pos[i], &img, &p.vel[i], &p.force[i], &p.normal[i]};
-      for (const Vec3* v : fields)
-        mine.insert(mine.end(), {(*v)[0], (*v)[1], (*v)[2]});
-    }
+    if (o == me)
+      pack_state(p, i, mine);
   }
   for (int r = 1; r < size; ++r)
     displs[r] = displs[r - 1] + counts[r - 1];
@@ -81,13 +96,8 @@ void System::gather_all_particles() {
     const int o = m_spread.owner[i];
     if (o < 0)
       continue;
-    const double* v = all.data() + displs[o];
+    unpack_state(p, i, all.data() + displs[o]);
     displs[o] += per;
-    p.pos[i] = Vec3(v[0], v[1], v[2]);
-    p.image[i] = Vec3i(static_cast<int>(v[3]), static_cast<int>(v[4]), static_cast<int>(v[5]));
-    p.vel[i] = Vec3(v[6], v[7], v[8]);
-    p.force[i] = Vec3(v[9], v[10], v[11]);
-    p.normal[i] = Vec3(v[12], v[13], v[14]);
   }
 }
 
@@ -282,20 +292,9 @@ void System::resort_spread() {
       g[d] = std::min(std::max(static_cast<int>(std::floor(f[d] / agrid)), 0), nodes[d] - 1);
     return g;
   };
-  constexpr int per = 15; // position, image, velocity, force, normal
-  auto pack = [&](std::vector<double>& out, std::size_t i) {
-    const Vec3 img = p.image[i].cast<double>();
-    const Vec3* fields[5] = {&p.pos[i], &img, &p.vel[i], &p.force[i], &p.normal[i]};
-    for (const Vec3* v : fields)
-      out.insert(out.end(), {(*v)[0], (*v)[1], (*v)[2]});
-  };
-  auto unpack = [&](const double* v, std::size_t i) {
-    p.pos[i] = Vec3(v[0], v[1], v[2]);
-    p.image[i] = Vec3i(static_cast<int>(v[3]), static_cast<int>(v[4]), static_cast<int>(v[5]));
-    p.vel[i] = Vec3(v[6], v[7], v[8]);
-    p.force[i] = Vec3(v[9], v[10], v[11]);
-    p.normal[i] = Vec3(v[12], v[13], v[14]);
-  };
+  constexpr int per = state_numbers;
+  auto pack = [&](std::vector<double>& out, std::size_t i) { pack_state(p, i, out); };
+  auto unpack = [&](const double* v, std::size_t i) { unpack_state(p, i, v); };
   // (1) new owners of this rank's particles (a cell follows its reference,
   // which this rank owns too), the changes to every rank
   std::vector<int> changes; // pairs (index, new owner)
