@@ -169,6 +169,32 @@ class ErrorOnOneRank(Base):
         self.assertLess(seconds, 30.0)
         self.assert_ranks_gone()
 
+    def test_query_on_one_rank_says_why_it_waits(self):
+        """A query made on rank 0 alone (inside `if lbmd.rank == 0:`) cannot
+        return until the other ranks make it too: rank 0 says so on stderr
+        (after PYOIF_COLLECTIVE_WARN_S seconds, 10 by default) instead of
+        hanging without a word. Here rank 1 makes the query later, so the
+        job ends normally."""
+        path = self.script("""
+            import os, sys, time
+            import lbmd
+            #PID
+            s = lbmd.System(box_l=[16.0, 8.0, 8.0]); s.time_step = 0.1
+            lbf = lbmd.lb.LBFluid(agrid=1.0, tau=0.1, dens=1.0, visc=1.0)
+            s.actors.add(lbf)
+            s.part.add(pos=[[3.0, 3.0, 3.0]])
+            if lbmd.rank == 1:
+                time.sleep(4.0)
+            print("position", s.part.all().pos[0])
+            """)
+        rc, out, err, seconds = self.mpirun(path, self.tmp.name, env={"PYOIF_COLLECTIVE_WARN_S": "1"})
+        self.assertEqual(rc, 0, err)
+        self.assertIn("position [3. 3. 3.]", out)
+        self.assertIn("[rank 0] a particle property query has waited 1 s for the other ranks", err)
+        self.assertIn("inside `if lbmd.rank == 0:`", err)
+        self.assertNotIn("[rank 1] a particle property query", err)
+        self.assert_ranks_gone()
+
     def test_error_on_rank_0_keeps_its_printed_lines(self):
         """What the failing rank printed before the error (buffered, stdout is
         a pipe) still comes out: the hook flushes before MPI_Abort."""

@@ -36,6 +36,7 @@ lb::Collision collision_of(const std::string& name) {
  *  (nx, ny, nz, components); collective under MPI (LBFluid::get_block). */
 RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
                     const Vec3i& hi) {
+  collective_entry("a query of the fluid's nodes");
   const std::vector<double> values = fluid.get_block(prop, lo, hi);
   const Vec3i n = hi - lo;
   const py::ssize_t nc = static_cast<py::ssize_t>(values.size() / n.prod());
@@ -47,6 +48,7 @@ RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& 
 
 void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                const RealArray& values) {
+  collective_entry("setting the fluid's nodes");
   fluid.set_block(prop, lo, hi, std::vector<double>(values.data(), values.data() + values.size()));
 }
 

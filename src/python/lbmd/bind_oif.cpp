@@ -62,11 +62,13 @@ membrane::Selection selection(int bond_id, int mol_id, int term) {
 /** The analysis of the selected bonds, compiled and evaluated by the
  *  membrane component's driver, the time step's. */
 std::vector<membrane::CellReport> analyse(System& s, const membrane::Selection& select) {
+  collective_entry("a cell analysis");
   s.synchronize(); // spread over ranks: every copy current (collective)
   return membrane::analyse(s.bonded, select, s.particles, s.box, s.time, nullptr);
 }
 
 py::tuple cell_sums(System& s, int bond_id) {
+  collective_entry("a cell analysis");
   s.synchronize(); // spread over ranks: every copy current (collective)
   check_kind<OifGlobalForces, OifOutDirection>(
       s, "oif_cell_sums", bond_id, "a triangle bond (OifGlobalForces or OifOutDirection)");
@@ -82,6 +84,7 @@ py::tuple cell_sums(System& s, int bond_id) {
 }
 
 py::dict energies(System& s, int bond_id, int mol_id) {
+  collective_entry("a cell analysis");
   s.synchronize(); // spread over ranks: every copy current (collective)
   check_kind<OifLocalForces, OifGlobalForces>(s, "oif_energies", bond_id);
   const auto reports = analyse(s, selection(bond_id, mol_id, -1));
@@ -103,6 +106,7 @@ py::dict energies(System& s, int bond_id, int mol_id) {
 }
 
 py::tuple forces(System& s, int bond_id, const std::string& term, int mol_id) {
+  collective_entry("a cell analysis");
   s.synchronize(); // spread over ranks: every copy current (collective)
   check_kind<OifLocalForces, OifGlobalForces>(s, "oif_forces", bond_id);
   const int which = membrane::term_of(term);

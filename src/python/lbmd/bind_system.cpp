@@ -60,6 +60,7 @@ std::vector<int> indices_of(const System& s, const IdArray& ids) {
 }
 
 RealArray get_vectors(System& s, const std::string& field, const IdArray& ids) {
+  collective_entry("a particle property query");
   s.synchronize(); // spread over ranks: every copy current (collective)
   const auto idx = indices_of(s, ids);
   RealArray out({static_cast<py::ssize_t>(idx.size()), py::ssize_t{3}});
@@ -95,6 +96,7 @@ RealArray get_vectors(System& s, const std::string& field, const IdArray& ids) {
 }
 
 void set_vectors(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  collective_entry("setting a particle property");
   s.synchronize();
   const auto idx = indices_of(s, ids);
   if (values.ndim() != 2 || values.shape(0) != static_cast<py::ssize_t>(idx.size()) ||
@@ -159,6 +161,7 @@ py::array get_scalars(const System& s, const std::string& field, const IdArray& 
 }
 
 void set_scalars(System& s, const std::string& field, const IdArray& ids, const RealArray& values) {
+  collective_entry("setting a particle property");
   s.synchronize();
   enum class Scalar { mass, type, mol_id, fix };
   const Scalar which = field == "mass"     ? Scalar::mass
@@ -431,6 +434,7 @@ void bind_system(py::module_& m) {
       .def("compute_forces", &System::compute_forces)
       .def("energies",
            [](System& s) {
+             collective_entry("analysis.energy()");
              const Energies e = s.compute_energies();
              py::dict d;
              d["total"] = e.total();

@@ -13,4 +13,10 @@ void bind_shapes(pybind11::module_& m);
 void bind_lb(pybind11::module_& m);
 void bind_oif(pybind11::module_& m);
 
-}  // namespace pyoif::python
+/** Called first by every collective query (particle properties, the
+ *  fluid's nodes, analysis): under mpirun a non-blocking barrier of all
+ *  ranks that says on stderr, after 10 s of waiting, that a query made on
+ *  some ranks only never returns (collective.cpp). `what` names the query. */
+void collective_entry(const char* what);
+
+} // namespace pyoif::python
