@@ -138,38 +138,6 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
 }
 
 namespace {
-/** Every rank gets every particle's coupling force from the rank that gives
- *  it (the values are copied, so they are those of one rank: exact): one
- *  allgather of each rank's forces, in particle order. */
-void share_forces(const DomainGrid& domain, const std::vector<int>& giver, std::vector<Vec3>& force,
-                  LBFluid::CouplingLedger& ledger) {
-  const int size = domain.size(), me = domain.rank();
-  std::vector<int>& counts = ledger.share_counts;
-  std::vector<int>& displs = ledger.share_displs;
-  counts.assign(size, 0);
-  displs.assign(size, 0);
-  std::vector<double>& mine = ledger.share_send;
-  mine.clear();
-  for (std::size_t i = 0; i < giver.size(); ++i) {
-    counts[giver[i]] += 3;
-    if (giver[i] == me)
-      mine.insert(mine.end(), {force[i][0], force[i][1], force[i][2]});
-  }
-  for (int r = 1; r < size; ++r)
-    displs[r] = displs[r - 1] + counts[r - 1];
-  std::vector<double>& all = ledger.share_recv;
-  all.resize(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
-  MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(),
-                 displs.data(), MPI_DOUBLE, domain.comm());
-  for (std::size_t i = 0; i < giver.size(); ++i) {
-    const double* f = all.data() + displs[giver[i]];
-    displs[giver[i]] += 3;
-    force[i] = Vec3(f[0], f[1], f[2]);
-  }
-}
-} // namespace
-
-namespace {
 
 /** The coupling of the particles this rank computes (all, on one rank):
  *  their forces into the ledger's coupling_force (zero where not computed),
@@ -391,6 +359,8 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   auto& p = particles;
   const std::size_t n = p.n_local();
   const bool distributed = distribution && distribution->share;
+  if (split && !distributed) // (System always passes it with a split lattice)
+    throw std::logic_error("couple_particles: a split lattice needs a CouplingDistribution");
   try {
     couple_on_this_rank(fluid, p, box, params, step, time_step, frame, is_current);
   } catch (...) {
@@ -404,10 +374,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   std::vector<Vec3>& coupling_force = ledger.coupling_force;
   if (split) {
     const auto start = std::chrono::steady_clock::now();
-    if (distributed)
-      distribution->share(coupling_force, ledger.giver);
-    else
-      share_forces(fluid.domain(), ledger.giver, coupling_force, ledger);
+    distribution->share(coupling_force, ledger.giver);
     fluid.add_coupling_exchange_seconds(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }

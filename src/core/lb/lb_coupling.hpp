@@ -23,10 +23,9 @@ struct CouplingParams {
   std::uint64_t seed = 0;
 };
 
-/** How the particles are spread over the ranks of a decomposed lattice. Null
- *  (the default): every rank holds every particle up to date and gets every
- *  force by one allgather. Else only the particles marked `current` are up
- *  to date on this rank, and `share` gives each particle this rank
+/** How the particles are spread over the ranks of a decomposed lattice
+ *  (required there; null on an undivided lattice). Only the particles marked
+ *  `current` are up to date on this rank, and `share` gives each particle this rank
  *  integrates its force: called with each particle's force as this rank
  *  computed it (where its stencil touches this rank's subdomain) and the
  *  giving rank per particle (that of the stencil's first node, -1 where this

@@ -308,12 +308,9 @@ public:
     std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
     std::vector<Stencil> stencils;                       ///< per particle of the current pass
     /// decomposed lattice: per particle the rank of its stencil's first
-    /// node, which gives the particle its force (share_forces), and the
-    /// exchange's buffers
+    /// node, which gives the particle its force (CouplingDistribution)
     std::vector<int> giver;
-    std::vector<Vec3> coupling_force; ///< per particle, this pass
-    std::vector<int> share_counts, share_displs;
-    std::vector<double> share_send, share_recv;
+    std::vector<Vec3> coupling_force;           ///< per particle, this pass
     std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
   };
   CouplingLedger& coupling_ledger() { return m_ledger; }

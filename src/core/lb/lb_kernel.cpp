@@ -487,28 +487,30 @@ void LBFluid::refresh_ghost_velocities() {
   if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
     return;
   const auto start = std::chrono::steady_clock::now();
+  // (the peers' halo buffers: this exchange never overlaps a halo step)
   std::vector<MPI_Request> requests;
-  std::vector<std::vector<double>> in(m_peers.size()), out(m_peers.size());
-  for (std::size_t k = 0; k < m_peers.size(); ++k) {
-    in[k].resize(3 * m_peers[k].velocity_ghost.size());
+  requests.reserve(2 * m_peers.size());
+  for (const HaloPeer& peer : m_peers) {
+    peer.recv.resize(3 * peer.velocity_ghost.size());
     requests.emplace_back();
-    MPI_Irecv(in[k].data(), static_cast<int>(in[k].size()), MPI_DOUBLE, m_peers[k].rank, 72,
+    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 72,
               m_grid.comm(), &requests.back());
   }
-  for (std::size_t k = 0; k < m_peers.size(); ++k) {
-    for (const std::size_t n : m_peers[k].velocity_face) {
+  for (const HaloPeer& peer : m_peers) {
+    peer.send.clear();
+    for (const std::size_t n : peer.velocity_face) {
       const Vec3 u = velocity_at_index(n);
-      out[k].insert(out[k].end(), {u[0], u[1], u[2]});
+      peer.send.insert(peer.send.end(), {u[0], u[1], u[2]});
     }
     requests.emplace_back();
-    MPI_Isend(out[k].data(), static_cast<int>(out[k].size()), MPI_DOUBLE, m_peers[k].rank, 72,
+    MPI_Isend(peer.send.data(), static_cast<int>(peer.send.size()), MPI_DOUBLE, peer.rank, 72,
               m_grid.comm(), &requests.back());
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
-  for (std::size_t k = 0; k < m_peers.size(); ++k)
-    for (std::size_t i = 0; i < m_peers[k].velocity_ghost.size(); ++i)
-      m_ghost_velocity[m_ghost_slot.at(m_peers[k].velocity_ghost[i])] =
-          Vec3(in[k][3 * i], in[k][3 * i + 1], in[k][3 * i + 2]);
+  for (const HaloPeer& peer : m_peers)
+    for (std::size_t i = 0; i < peer.velocity_ghost.size(); ++i)
+      m_ghost_velocity[m_ghost_slot.at(peer.velocity_ghost[i])] =
+          Vec3(peer.recv[3 * i], peer.recv[3 * i + 1], peer.recv[3 * i + 2]);
   m_ghost_velocity_version = m_state_version;
   m_coupling_exchange_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -253,6 +253,8 @@ private:
   void update_spread();
   /** Every rank sends its particles' state to all (allgather). */
   void gather_all_particles();
+  /** The rank whose lattice subdomain holds position x. */
+  int rank_of_position(const Vec3& x) const;
   /** Spread.reference and cross_bonds, when the particles or bonds changed. */
   void update_topology();
   /** Owners from the current state (all ranks alike), before a re-sort. */

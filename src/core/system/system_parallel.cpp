@@ -149,21 +149,21 @@ void System::update_topology() {
   m_spread.topology_bonds = m_bonds_version;
 }
 
+int System::rank_of_position(const Vec3& x) const {
+  // the rank whose subdomain holds the lattice node of x (folded)
+  const Vec3 f = box.folded(x);
+  const Vec3i nodes = m_lb->grid();
+  Vec3i g;
+  for (int d = 0; d < 3; ++d)
+    g[d] = std::min(std::max(static_cast<int>(std::floor(f[d] / m_lb->agrid())), 0), nodes[d] - 1);
+  return m_lb->domain().owner_of(g);
+}
+
 void System::assign_owners() {
   auto& p = particles;
   const std::size_t n = p.n_local();
   const DomainGrid& grid = m_lb->domain();
   const int me = m_spread.comm.rank();
-  const double agrid = m_lb->agrid();
-  const Vec3i nodes = m_lb->grid();
-  auto node_of = [&](const Vec3& x) {
-    Vec3i g;
-    for (int d = 0; d < 3; ++d) {
-      g[d] = static_cast<int>(std::floor(box.folded(x)[d] / agrid));
-      g[d] = std::min(std::max(g[d], 0), nodes[d] - 1);
-    }
-    return g;
-  };
   update_topology();
   const std::vector<std::uint8_t> owned_before = m_spread.owned;
   m_spread.owner.assign(n, 0);
@@ -172,8 +172,8 @@ void System::assign_owners() {
     // a cell's nodes follow its reference, looked up once per cell (the
     // reference is its own reference, and comes first in its cell)
     const int ref = m_spread.reference[i];
-    m_spread.owner[i] = static_cast<std::size_t>(ref) < i ? m_spread.owner[ref]
-                                                          : grid.owner_of(node_of(p.pos[ref]));
+    m_spread.owner[i] =
+        static_cast<std::size_t>(ref) < i ? m_spread.owner[ref] : rank_of_position(p.pos[ref]);
     m_spread.owned[i] = m_spread.owner[i] == me;
   }
   // the membranes compile this rank's cells anew only when they changed
@@ -284,14 +284,6 @@ void System::resort_spread() {
   const int me = m_spread.comm.rank(), size = m_spread.comm.size();
   const MPI_Comm comm = m_spread.comm.comm();
   const double agrid = m_lb->agrid();
-  const Vec3i nodes = m_lb->grid();
-  auto node_of = [&](const Vec3& x) {
-    const Vec3 f = box.folded(x);
-    Vec3i g;
-    for (int d = 0; d < 3; ++d)
-      g[d] = std::min(std::max(static_cast<int>(std::floor(f[d] / agrid)), 0), nodes[d] - 1);
-    return g;
-  };
   constexpr int per = state_numbers;
   auto pack = [&](std::vector<double>& out, std::size_t i) { pack_state(p, i, out); };
   auto unpack = [&](const double* v, std::size_t i) { unpack_state(p, i, v); };
@@ -303,7 +295,7 @@ void System::resort_spread() {
     if (!m_spread.owned[i])
       continue;
     const int ref = m_spread.reference[i];
-    const int new_owner = grid.owner_of(node_of(p.pos[ref]));
+    const int new_owner = rank_of_position(p.pos[ref]);
     extent2 = std::max(extent2, box.minimum_image(p.pos[i], p.pos[ref]).squaredNorm());
     if (new_owner != me)
       changes.insert(changes.end(), {static_cast<int>(i), new_owner});
