@@ -811,36 +811,32 @@ template <class Write> void write_on_root(MPI_Comm comm, int size, int rank, Wri
 }
 } // namespace
 
-void LBFluid::write_vtk_velocity(const std::string& path) const {
+void LBFluid::write_vtk_field(const std::string& path, const std::string& prop) const {
   // (x, y, z) blocks come z fastest; VTK wants x fastest
-  const std::vector<double> block = get_block("velocity", Vec3i::Zero(), m_global);
+  const std::vector<double> block = get_block(prop, Vec3i::Zero(), m_global);
+  const std::size_t nc = block.size() / static_cast<std::size_t>(m_global.prod());
   write_on_root(m_grid.comm(), m_grid.size(), m_grid.rank(), [&] {
     std::vector<double> data;
     data.reserve(block.size());
     for (int k = 0; k < m_global[2]; ++k)
       for (int j = 0; j < m_global[1]; ++j)
         for (int i = 0; i < m_global[0]; ++i) {
-          const double* u = block.data() +
-                            3 * ((static_cast<std::size_t>(i) * m_global[1] + j) * m_global[2] + k);
-          data.insert(data.end(), {u[0], u[1], u[2]});
+          const double* v =
+              block.data() +
+              nc * ((static_cast<std::size_t>(i) * m_global[1] + j) * m_global[2] + k);
+          data.insert(data.end(), v, v + nc);
         }
     io::write_vtk_structured_points(path, m_global, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid,
-                                    "velocity", 3, data);
+                                    prop, static_cast<int>(nc), data);
   });
 }
 
+void LBFluid::write_vtk_velocity(const std::string& path) const {
+  write_vtk_field(path, "velocity");
+}
+
 void LBFluid::write_vtk_boundary(const std::string& path) const {
-  const std::vector<double> block = get_block("boundary", Vec3i::Zero(), m_global);
-  write_on_root(m_grid.comm(), m_grid.size(), m_grid.rank(), [&] {
-    std::vector<double> data;
-    data.reserve(block.size());
-    for (int k = 0; k < m_global[2]; ++k)
-      for (int j = 0; j < m_global[1]; ++j)
-        for (int i = 0; i < m_global[0]; ++i)
-          data.push_back(block[(static_cast<std::size_t>(i) * m_global[1] + j) * m_global[2] + k]);
-    io::write_vtk_structured_points(path, m_global, Vec3::Constant(0.5 * m_p.agrid), m_p.agrid,
-                                    "boundary", 1, data);
-  });
+  write_vtk_field(path, "boundary");
 }
 
 } // namespace pyoif::lb

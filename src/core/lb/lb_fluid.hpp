@@ -357,6 +357,8 @@ private:
   }
   /** Throws InputError for a node outside [0, N); returns owned_index(node). */
   std::size_t checked_node(const Vec3i& node) const;
+  /** Collective: property prop of every node as VTK structured points, by rank 0. */
+  void write_vtk_field(const std::string& path, const std::string& prop) const;
   /** Throws InputError unless lo <= node < hi is a non-empty block of the lattice. */
   void check_block(const Vec3i& lo, const Vec3i& hi) const;
   /** Flags of this rank's padded nodes (ghosts too) for these boundaries. */
