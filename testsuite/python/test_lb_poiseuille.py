@@ -7,7 +7,15 @@ x1 = L - agrid):  u_z(x) = f / (2 rho nu) (x - x0)(x1 - x).
 - TRT with the magic parameter 3/16: the lattice solution is exactly the
   parabola at the nodes (Ginzburg, Verhaeghe & d'Humieres 2008), so the
   relative error must be at round-off level (< 1e-9 after convergence).
-- MRT and BGK (not magic at nu_lattice = 1/6): the error is O(agrid^2); at
+- MRT (the default; odd ghost modes at the magic rate): the wall is midway
+  at every viscosity. The case of a user's report, H = 20 fluid nodes,
+  agrid 1, tau 1, with default settings: max error < 1e-4 of the peak speed
+  at nu = 1/6 and at nu = 1 (measured 2.8e-8 and 7.7e-6 at peak speed 0.02,
+  a compressibility effect that falls as u^2: 7e-11 and 1.9e-8 at 0.001;
+  the target was 2e-3 and 5e-3). MRT_ESPRESSO (ghosts at rate 1, ESPResSo 4.2) gives
+  ESPResSo's own figures on that case, 8.4e-4 and 1.75e-2 (within 3 %):
+  the check that the test tells the two apart.
+- MRT_ESPRESSO and BGK (not magic at nu_lattice = 1/6): the error is O(agrid^2); at
   three resolutions N = 8, 16, 32 fluid nodes (fixed lattice viscosity,
   forcing scaled to keep the peak speed fixed) the fitted slope of
   log(error) against log(agrid) must be within 2 +- 0.2, and the finest
@@ -26,10 +34,11 @@ DENS = 2.0
 U_MAX = 0.02  # peak speed in lattice units (Mach number ~ 0.035)
 
 
-def poiseuille(n_fluid, collision, nu_lattice=1.0 / 6.0, height=4.0):
-    """Runs to steady state; returns (relative L2 error, max relative error)."""
+def poiseuille(n_fluid, collision, nu_lattice=1.0 / 6.0, height=4.0, unit_lattice=False):
+    """Runs to steady state; returns (relative L2 error, max relative error).
+    unit_lattice: agrid = tau = 1 (MD units = lattice units)."""
     agrid = height / n_fluid
-    tau = 0.05 * agrid ** 2  # diffusive scaling: nu_lattice fixed
+    tau = 1.0 if unit_lattice else 0.05 * agrid ** 2  # diffusive scaling: nu_lattice fixed
     visc = nu_lattice * agrid ** 2 / tau
     length = height + 2 * agrid
     system = lbmd.System(box_l=[length, 2 * agrid, 3 * agrid])
@@ -37,8 +46,9 @@ def poiseuille(n_fluid, collision, nu_lattice=1.0 / 6.0, height=4.0):
     # f = 8 rho nu u_max / H^2, u_max in MD units
     u_max = U_MAX * agrid / tau
     force = 8 * DENS * visc * u_max / height ** 2
+    kwargs = {} if collision is None else {"collision": collision}  # None: the default
     lbf = lbmd.lb.LBFluid(agrid=agrid, dens=DENS, visc=visc, tau=tau,
-                          ext_force_density=[0, 0, force], collision=collision)
+                          ext_force_density=[0, 0, force], **kwargs)
     system.actors.add(lbf)
     system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
         shape=lbmd.shapes.Wall(normal=[1, 0, 0], dist=agrid)))
@@ -65,6 +75,16 @@ class Poiseuille(unittest.TestCase):
             l2, linf = poiseuille(12, "TRT", nu_lattice=nu)
             self.assertLess(linf, 1e-9, f"TRT nu_lattice={nu}")
 
+    def test_default_mrt_wall_midway_at_any_viscosity(self):
+        # height = n_fluid with unit_lattice: agrid 1, tau 1, visc = nu_lattice
+        for nu in (1.0 / 6.0, 1.0):
+            _, linf = poiseuille(20, None, nu_lattice=nu, height=20.0, unit_lattice=True)
+            self.assertLess(linf, 1e-4, f"default collision, nu_lattice={nu}")
+        for nu, espresso in ((1.0 / 6.0, 8.4e-4), (1.0, 1.75e-2)):
+            _, linf = poiseuille(20, "MRT_ESPRESSO", nu_lattice=nu, height=20.0,
+                                 unit_lattice=True)
+            self.assertAlmostEqual(linf / espresso, 1.0, delta=0.03, msg=f"nu_lattice={nu}")
+
     def check_second_order(self, collision):
         ns = np.array([8, 16, 32])
         errors = np.array([poiseuille(n, collision)[0] for n in ns])
@@ -73,8 +93,8 @@ class Poiseuille(unittest.TestCase):
         self.assertLess(errors[-1], 1e-2)
         self.assertAlmostEqual(slope, 2.0, delta=0.2, msg=f"{collision} errors {errors}")
 
-    def test_mrt_second_order(self):
-        self.check_second_order("MRT")
+    def test_mrt_espresso_second_order(self):
+        self.check_second_order("MRT_ESPRESSO")
 
     def test_bgk_second_order(self):
         self.check_second_order("BGK")

@@ -57,7 +57,10 @@
 
 namespace pyoif::lb {
 
-enum class Collision { mrt, trt, bgk };
+/** mrt: DSL's MRT with the odd ghost modes at the magic rate (default, wall
+ *  position independent of viscosity); mrt_espresso: every ghost mode at
+ *  rate 1 (ESPResSo 4.2's choice); trt: magic TRT; bgk: one rate. */
+enum class Collision { mrt, mrt_espresso, trt, bgk };
 
 /** Parameters in MD units (ESPResSo 4.2 names). */
 struct LBParams {
@@ -402,7 +405,7 @@ private:
   /** fill_ghosts: copy the domain into the ghost layer (after an even update);
    *  else fold the ghost layer into the domain (after an odd update). */
   void halo_exchange(double* f, bool fill_ghosts) const;
-  template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
+  template <bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
   bool update_run(const Run& r, double* f, BadNode& bad);
   /** Throws SimulationInstability for the bad node; step() refuses to run
    *  after it (m_failed_update). */

@@ -91,11 +91,12 @@ template <typename Body> __attribute__((always_inline)) inline void for_each_pai
 }
 
 /** Collision of one node; f in, out post-collision (same q order).
- *  ghosts_relaxed: the ghost modes go to equilibrium in one update (lambda
- *  even = odd = 0, the MRT default), which drops their terms at compile time.
+ *  even_ghosts_relaxed: the even ghost modes go to equilibrium in one update
+ *  (lambda even = 0, both MRTs), which drops their terms at compile time; the
+ *  odd part always relaxes at l.odd (0 in ESPResSo's MRT: the same result).
  *  The sums run over the non-zero velocity components only (D3Q19 has 45 of
  *  its 81 c_a c_b products zero), in the order of the plain sums over k. */
-template <bool ghosts_relaxed>
+template <bool even_ghosts_relaxed>
 __attribute__((always_inline)) inline NodeResult collide(const double* f, const double* F,
                                                          const Relaxation& l, double* out) {
   double s[n_pairs], d[n_pairs];
@@ -135,8 +136,8 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   const double n_iso = (n_xx + n_yy + n_zz) * (1.0 / 3.0);
   const double uf_iso = (2.0 / 3.0) * (u[0] * F[0] + u[1] * F[1] + u[2] * F[2]);
   const double shear_src = 0.5 * (1.0 + l.shear), bulk_src = 0.5 * (1.0 + l.bulk);
-  const double l_even = ghosts_relaxed ? 0.0 : l.even;
-  const double l_odd = ghosts_relaxed ? 0.0 : l.odd;
+  const double l_even = even_ghosts_relaxed ? 0.0 : l.even;
+  const double l_odd = l.odd;
   const double ds = l.shear - l_even, db = l.bulk - l_even;
   const double iso = db * n_iso + bulk_src * uf_iso;
   const double b_xx = ds * (n_xx - n_iso) + shear_src * (2.0 * u[0] * F[0] - uf_iso) + iso;
@@ -151,7 +152,7 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
                         (1.0 - l_odd) * j[2] + F[2]};
   const double eq_common = 1.0 - 1.5 * u2;
   double out0 = one_minus_le * w[0] * rho * eq_common;
-  if constexpr (!ghosts_relaxed)
+  if constexpr (!even_ghosts_relaxed)
     out0 += l_even * f[0];
   out[0] = out0 - w[0] * 4.5 * tr_b_third;
   for_each_pair([&](auto K) __attribute__((always_inline)) {
@@ -163,12 +164,10 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
     if constexpr (cx * cy != 0 || cx * cz != 0 || cy * cz != 0)
       cbc += 2.0 * dot<cx * cy, cx * cz, cy * cz>(b_xy, b_xz, b_yz);
     double even = one_minus_le * wk * rho * (eq_common + 4.5 * cu * cu);
-    if constexpr (!ghosts_relaxed)
+    if constexpr (!even_ghosts_relaxed)
       even += 0.5 * l_even * s[k];
     even += wk * 4.5 * (cbc - tr_b_third);
-    double odd = 3.0 * wk * dot<cx, cy, cz>(jj[0], jj[1], jj[2]);
-    if constexpr (!ghosts_relaxed)
-      odd = 0.5 * l_odd * d[k] + odd;
+    const double odd = 0.5 * l_odd * d[k] + 3.0 * wk * dot<cx, cy, cz>(jj[0], jj[1], jj[2]);
     out[2 * k + 1] = even + odd;
     out[2 * k + 2] = even - odd;
   });
@@ -177,7 +176,7 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
 
 } // namespace
 
-template <bool thermal, bool with_field, bool ghosts_relaxed, bool even>
+template <bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
 bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
   // AA pattern (see lb_fluid.hpp): population q of node n is read at
   // f[read[q] + n] and its post-collision value written to f[write[q] + n];
@@ -257,7 +256,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         for (int q = 0; q < Q; ++q)
           fn[q] = in[q][i];
         const double F[3] = {force[0][i], force[1][i], force[2][i]};
-        const NodeResult res = collide<ghosts_relaxed>(fn, F, l, out);
+        const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
 #pragma GCC unroll 19
         for (int q = 0; q < Q; ++q)
           fout[q][i] = out[q];
@@ -269,7 +268,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
           double fn[Q], out[Q];
           for (int q = 0; q < Q; ++q)
             fn[q] = in[q][i];
-          const NodeResult res = collide<ghosts_relaxed>(fn, F, l, out);
+          const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
           if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
             return record_bad(b0 + i, F);
         }
@@ -576,7 +575,7 @@ void LBFluid::step() {
   ++m_state_version;
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
-  const bool relaxed = m_relax.even == 0.0 && m_relax.odd == 0.0;
+  const bool relaxed = m_relax.even == 0.0;
   const bool even = !m_swapped;
   const long n_runs = static_cast<long>(m_runs.size());
   long first_bad = n_runs;

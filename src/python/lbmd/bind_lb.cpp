@@ -25,11 +25,13 @@ using RealArray = py::array_t<double, py::array::c_style | py::array::forcecast>
 lb::Collision collision_of(const std::string& name) {
   if (name == "MRT")
     return lb::Collision::mrt;
+  if (name == "MRT_ESPRESSO")
+    return lb::Collision::mrt_espresso;
   if (name == "TRT")
     return lb::Collision::trt;
   if (name == "BGK")
     return lb::Collision::bgk;
-  throw InputError("collision must be 'MRT', 'TRT' or 'BGK', got '" + name + "'");
+  throw InputError("collision must be 'MRT', 'MRT_ESPRESSO', 'TRT' or 'BGK', got '" + name + "'");
 }
 
 /** Values of property prop on the block lo <= (i, j, k) < hi, shape

@@ -14,7 +14,7 @@ import numpy as np
 from . import _lbmd
 from .validation import Param, ParameterObject, non_negative, positive
 
-_COLLISIONS = ("MRT", "TRT", "BGK")
+_COLLISIONS = ("MRT", "MRT_ESPRESSO", "TRT", "BGK")
 
 
 def _cpus():
@@ -37,7 +37,9 @@ def _threads_param():
 
 class LBFluid(ParameterObject):
     """D3Q19 lattice-Boltzmann fluid; collision 'MRT' (default; fluctuating
-    MRT when kT > 0), 'TRT' (magic parameter 3/16) or 'BGK'."""
+    MRT when kT > 0; odd ghost modes at the magic rate, so walls stay midway
+    at any viscosity), 'MRT_ESPRESSO' (every ghost mode at rate 1, as
+    ESPResSo 4.2), 'TRT' (magic parameter 3/16) or 'BGK'."""
 
     _params = [Param("agrid", "float", check=positive, doc="lattice spacing"),
                Param("dens", "float", check=positive, doc="mass density"),
@@ -49,7 +51,7 @@ class LBFluid(ParameterObject):
                Param("kT", "float", 0.0, check=non_negative, doc="thermal energy"),
                Param("seed", "seed", None, check=non_negative, doc="RNG seed (required if kT > 0)"),
                Param("collision", "object", "MRT", cls=str,
-                     check=(lambda s: s.upper() in _COLLISIONS, "one of 'MRT', 'TRT', 'BGK'")),
+                     check=(lambda s: s.upper() in _COLLISIONS, "one of 'MRT', 'MRT_ESPRESSO', 'TRT', 'BGK'")),
                _threads_param()]
 
     def _validate(self):
