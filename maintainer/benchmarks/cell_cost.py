@@ -5,6 +5,11 @@ RBC adds to a fluid run (membrane forces + LB coupling + contacts), for
 
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py [--cells 0 5 20 60] [--chunk 10 --rounds 60]
         [--csv cell_cost.csv] [--no-fluid] [--chunk 0 --steps 200 --repeats 5]
+    OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/cell_cost.py --checks-cost [--cells 60]
+
+--checks-cost: what the run's named-failure checks cost (system.cell_checks:
+inverted triangles, volumes, drift, membrane crossings; doc/engine.md): the
+scene with the largest --cells count twice, checks on and off, in turns.
 
 Scene (as the ESPResSo 4.2.2 timing in doc/model.md): channel
 100 x 40 x 20 (agrid 1, tau = time step = 0.1, visc 1.5, dens 1) between two
@@ -145,6 +150,21 @@ def creation_time(repeats=20):
     return float(np.median(times))
 
 
+def checks_cost(args):
+    """Seconds per 1000 steps with the cells' checks on and off (the same
+    scene twice, in turns) and the checks' share of a step."""
+    n = max(args.cells)
+    systems = [build(n, fluid=not args.no_fluid)[0] for _ in range(2)]
+    systems[1].cell_checks = False
+    on, off = (r[0] for r in (time_chunks(systems, args.chunk, args.rounds) if args.chunk
+                              else time_runs(systems, args.steps, args.repeats)))
+    share = 100.0 * (on - off) / off
+    print(f"{n} cells{'' if args.no_fluid else ' in fluid'}: checks on {on:.3f} s, off {off:.3f} s "
+          f"per 1000 steps: the checks cost {share:+.2f} % of a step (target < 2 %)")
+    write_rows(args.csv, [{"cells": n, "fluid": not args.no_fluid, "checks_on_s_per_1000_steps": on,
+                           "checks_off_s_per_1000_steps": off, "checks_share_percent": share}])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=200, help="with --chunk 0: MD steps per timed run")
@@ -158,12 +178,17 @@ def main():
                          "time of --repeats runs of --steps steps instead")
     ap.add_argument("--rounds", type=int, default=60, help="rounds of --chunk runs")
     ap.add_argument("--csv", default="cell_cost.csv")
+    ap.add_argument("--checks-cost", action="store_true",
+                    help="the cost of system.cell_checks in the scene with the most cells")
     args = ap.parse_args()
     if args.chunk and (args.steps != ap.get_default("steps") or args.repeats != ap.get_default("repeats")):
         ap.error("--steps and --repeats belong to --chunk 0 (the best of long runs); with --chunk "
                  f"{args.chunk} the runs are set by --chunk and --rounds")
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("note: set OMP_NUM_THREADS=1 for the one-core figure")
+    if args.checks_cost:
+        checks_cost(args)
+        return
     t_create = creation_time()
     print(f"creating one 374-node cell with all bonds and exclusions: {1e3 * t_create:.2f} ms (median)")
     unit = "wall s" if args.chunk else "CPU s"

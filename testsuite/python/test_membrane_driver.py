@@ -117,6 +117,9 @@ class LanesEqualOneCellAtATime(unittest.TestCase):
         self.compare(system, "cell added")
         system.thermostat.set_langevin(kT=0.0, gamma=0.5)
         system.part.all().ext_force = [0.05, -0.03, 0.02]
+        # the noisy cells have folded triangles (noise 0.15) and one "cell" of
+        # two: a comparison of drivers, not a physical run
+        system.cell_checks = False
         system.integrator.run(20)
         self.compare(system, "20 steps")
 

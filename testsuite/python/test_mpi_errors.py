@@ -142,14 +142,16 @@ class ErrorOnOneRank(Base):
                 s.integrator.run(20)
                 print(f"@rank {lbmd.rank}: no error@", file=sys.stderr, flush=True)
             except lbmd.SimulationInstability as e:
-                print(f"@rank {lbmd.rank} caught: {e}@", file=sys.stderr, flush=True)
+                print(f"@rank {lbmd.rank} caught: {e} [{e.cause} {e.step} {e.particle} {e.value}]@",
+                      file=sys.stderr, flush=True)
             s2, lbf2 = scene()
             lbf2[12, 4, 4].velocity = [8.0, 0.0, 0.0]  # 0.8 lattice units, beyond the sound speed; rank 1
             try:
                 s2.integrator.run(5)
                 print(f"@rank {lbmd.rank}: no fluid error@", file=sys.stderr, flush=True)
             except lbmd.SimulationInstability as e:
-                print(f"@rank {lbmd.rank} fluid: {e}@", file=sys.stderr, flush=True)
+                print(f"@rank {lbmd.rank} fluid: {e} [{e.cause} {e.step} {e.node}]@", file=sys.stderr,
+                      flush=True)
             lbmd.comm.barrier()
             print("all ranks went on")
             """)
@@ -161,10 +163,13 @@ class ErrorOnOneRank(Base):
         self.assertEqual(sorted(caught), ["0", "1"], err)
         self.assertTrue(caught["0"].startswith("particle 0 "), caught)
         self.assertIn("penetrated", caught["0"])
+        # the attributes travel with the message (lbmd.SimulationInstability)
+        self.assertRegex(caught["0"], r"\[wall_penetration \d+ 0 [-0-9.e]+\]$")
         self.assertEqual(caught["0"], caught["1"])
         fluid = dict(re.findall(r"@rank (\d) fluid: (.*?)@", err, re.S))
         self.assertEqual(sorted(fluid), ["0", "1"], err)
         self.assertIn("unstable at node (12, 4, 4)", fluid["0"])
+        self.assertTrue(fluid["0"].endswith("[mach 1 (12, 4, 4)]"), fluid["0"])
         self.assertEqual(fluid["0"], fluid["1"])
         self.assertLess(seconds, 30.0)
         self.assert_ranks_gone()

@@ -28,9 +28,10 @@ inline int wrap_node(int i, int n) {
 using CompactStencil = LBFluid::CouplingLedger::Stencil;
 
 [[noreturn]] __attribute__((noinline, cold)) void throw_bad_position(const Vec3& pos) {
-  throw SimulationInstability("lattice-Boltzmann coupling: particle position (" +
-                              std::to_string(pos[0]) + ", " + std::to_string(pos[1]) + ", " +
-                              std::to_string(pos[2]) + ") is not finite or far outside the box");
+  throw SimulationInstability(
+      "particle_nan", "lattice-Boltzmann coupling: particle position (" + std::to_string(pos[0]) +
+                          ", " + std::to_string(pos[1]) + ", " + std::to_string(pos[2]) +
+                          ") is not finite or far outside the box");
 }
 
 /** Where this rank's subdomain lies, for the stencils: on an axis the
@@ -128,12 +129,15 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
     for (int d = 0; d < 3; ++d)
       if (!box.periodic()[d] && !(p.pos[i][d] >= 0.0 && p.pos[i][d] <= box.length()[d]))
         throw SimulationInstability(
+            "outside_lattice",
             "lattice-Boltzmann coupling: particle " + std::to_string(p.id[i]) + " at " +
-            format_number(p.pos[i][d]) + " along the non-periodic axis " + std::to_string(d) +
-            " left the box [0, " + format_number(box.length()[d]) +
-            "]; the fluid has no nodes there (it would couple to the far side). Walls "
-            "(constraints) keep particles inside; check the node-wall interaction and the "
-            "time step");
+                format_number(p.pos[i][d]) + " along the non-periodic axis " + std::to_string(d) +
+                " left the box [0, " + format_number(box.length()[d]) +
+                "]; the fluid has no nodes there (it would couple to the far side). Walls "
+                "(constraints) keep particles inside; check the node-wall interaction and the "
+                "time step")
+            .at_particle(p.id[i])
+            .with_value(p.pos[i][d]);
   throw std::logic_error("throw_outside: no particle outside");
 }
 

@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <type_traits>
 #include <utility>
@@ -52,6 +53,13 @@ constexpr double u2_limit = 1.0 / 3.0;
 struct NodeResult {
   double rho, u2;
 };
+
+/** A node the model cannot go on from: a density that is not positive or not
+ *  finite (an infinite one has zero speed), a speed at the sound speed or
+ *  not a number. Branch-free: it is evaluated for every node. */
+inline bool out_of_range(const NodeResult& res) {
+  return !(res.rho > 0.0) | !(res.rho <= std::numeric_limits<double>::max()) | !(res.u2 < u2_limit);
+}
 
 /** acc + a x for a velocity component a in {-1, 0, 1} known at compile time.
  *  A zero term is dropped here because IEEE arithmetic does not let the
@@ -260,7 +268,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
 #pragma GCC unroll 19
         for (int q = 0; q < Q; ++q)
           fout[q][i] = out[q];
-        bad |= !(res.rho > 0.0) | !(res.u2 < u2_limit);
+        bad |= out_of_range(res);
       }
       if (bad) {
         for (int i = 0; i < len; ++i) {
@@ -269,7 +277,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
           for (int q = 0; q < Q; ++q)
             fn[q] = in[q][i];
           const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
-          if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
+          if (out_of_range(res))
             return record_bad(b0 + i, F);
         }
         return record_bad(b0, force[0]); // not reached: the block had a bad node
@@ -292,7 +300,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         for (int d = 0; d < 3; ++d)
           F[d] += g[3 * n + d];
       const NodeResult res = collide<false>(fn, F, l, out);
-      if (!(res.rho > 0.0) || !(res.u2 < u2_limit))
+      if (out_of_range(res))
         return record_bad(n, F);
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
       // variance rho kT / c_s^2 * b_m (1 - lambda_m^2), projected back with
@@ -557,7 +565,12 @@ void LBFluid::report_instability(const BadNode& bad) {
          "forces or flow speed, or increase visc (relaxation rate "
       << 1.0 - m_relax.shear << ")";
   m_failed_update = msg.str();
-  throw SimulationInstability(msg.str());
+  // the cause: not a number, a density that is not positive, or the speed
+  // (Mach number |u| / c_s, c_s = 1/sqrt(3) lattice units) at the limit
+  const bool finite = std::isfinite(bad.rho) && std::isfinite(bad.speed);
+  const char* cause = !finite ? "lattice_nan" : !(bad.rho > 0.0) ? "negative_density" : "mach";
+  const double value = !finite || !(bad.rho > 0.0) ? bad.rho : bad.speed * std::sqrt(3.0);
+  throw SimulationInstability(cause, msg.str()).at_node(x, y, z).with_value(value);
 }
 
 void LBFluid::check_usable() const {
@@ -629,15 +642,16 @@ void LBFluid::step() {
         try {
           report_instability(bad_node);
         } catch (const SimulationInstability& e) {
-          message = e.what();
+          message = e.pack();
         }
       }
       int length = static_cast<int>(message.size());
       MPI_Bcast(&length, 1, MPI_INT, failing, m_grid.comm());
       message.resize(static_cast<std::size_t>(length));
       MPI_Bcast(message.data(), length, MPI_CHAR, failing, m_grid.comm());
-      m_failed_update = message;
-      throw SimulationInstability(message);
+      const SimulationInstability error = SimulationInstability::unpack(message);
+      m_failed_update = error.what();
+      throw error;
     }
   }
   if (first_bad < n_runs)

@@ -18,7 +18,10 @@ bool CellSystem::needs_rebuild(const ParticleStore& p, double time) const {
       msg << "particle " << p.id[i] << " has a non-finite or runaway position (" << x.transpose()
           << ") at time " << time << "; force " << p.force[i].transpose()
           << ". Reduce the time step or check the interaction parameters.";
-      throw SimulationInstability(msg.str());
+      throw SimulationInstability("particle_nan", msg.str())
+          .at_particle(p.id[i])
+          .at_time(time)
+          .with_value(x.norm());
     }
     if (!moved && (x - m_pos_at_rebuild[i]).squaredNorm() > limit2)
       moved = true;

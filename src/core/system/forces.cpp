@@ -63,7 +63,7 @@ void System::prepare_step(int moved) {
   if (m_spread.layout == p.layout_version && m_spread.owner.size() == n)
     gather_all_particles();
   if (code == 3)
-    report_fast_particle(m_time_step);
+    report_fast_particle(m_time_step, step_count);
   if (code == 2)
     cells.needs_rebuild(p, time); // names the runaway particle
   assign_owners();
@@ -73,6 +73,8 @@ void System::prepare_step(int moved) {
 }
 
 void System::add_membrane_forces(Energies* e) {
+  membranes.shape_checks = m_checks_due && !e;
+  membranes.step = static_cast<long long>(step_count);
   membranes.add_forces(bonded, m_bonds_version, particles, box, time, owned_mask(),
                        m_spread.version);
   if (!e)
@@ -139,6 +141,7 @@ void System::add_nonbonded_forces(Energies* e) {
   // spread: a pair of particles of two ranks is computed by both, each for
   // its own particle (the same value, so a particle's sum is the serial one)
   const std::uint8_t* own = owned_mask();
+  const bool crossing_check = m_checks_due && !e;
   for (const auto& pair : cells.pairs()) {
     const int a = pair[0], b = pair[1];
     const int owner_b = p.owner(b);
@@ -156,6 +159,8 @@ void System::add_nonbonded_forces(Energies* e) {
     c.mol_j = p.mol_id[owner_b];
     c.normal_i = p.normal[a];
     c.normal_j = p.normal[owner_b];
+    if (crossing_check && c.mol_i != c.mol_j)
+      check_membrane_crossing(c, p.id[a], p.id[owner_b]);
     double pair_energy = 0.0;
     const Vec3 f = pair_force(*params, c, e ? &pair_energy : nullptr);
     if (!own || own[a]) {
@@ -172,6 +177,34 @@ void System::add_nonbonded_forces(Energies* e) {
   cells.collect_ghost_forces(p);
   if (e)
     e->non_bonded += energy;
+}
+
+void System::check_membrane_crossing(const PairContext& c, int id_i, int id_j) const {
+  // Two membrane nodes of different cells, each behind the other's surface
+  // (x_i - x_j) . n_j < 0 and (x_j - x_i) . n_i < 0, with normals more than
+  // 60 degrees apart (|n_i - n_j| > 1; nearly parallel normals, at the rim
+  // of a contact, say nothing of the sides): the membranes have passed
+  // through each other. The contact model pulls a crossed pair back
+  // (membrane_collision.hpp), but a crossing means it was too weak.
+  // the signs first (most pairs face each other): no square roots for them
+  const double behind_j = -c.d.dot(c.normal_j), behind_i = c.d.dot(c.normal_i);
+  if (!(behind_j > 0.0 && behind_i > 0.0))
+    return;
+  const double ni = c.normal_i.norm(), nj = c.normal_j.norm();
+  const double inside_j = behind_j / nj, inside_i = behind_i / ni;
+  if (!((c.normal_i / ni - c.normal_j / nj).squaredNorm() > 1.0))
+    return;
+  std::ostringstream msg;
+  msg << "membranes crossed: node " << id_i << " of the cell with mol_id " << c.mol_i << " is "
+      << inside_j << " inside the membrane of the cell with mol_id " << c.mol_j << " (its node "
+      << id_j << " likewise " << inside_i << " inside the first) at time " << time
+      << ". The cell-cell contact is too weak for this flow: raise membrane_collision's a or "
+         "cutoff, or lower the time step (system.cell_checks = False lets cells pass)";
+  throw SimulationInstability("membrane_crossing", msg.str())
+      .at_particle(id_i)
+      .in_cell(c.mol_i)
+      .at_time(time)
+      .with_value(inside_j);
 }
 
 void System::add_constraint_forces(Energies* e) {
@@ -237,7 +270,11 @@ void System::add_constraint_forces(Energies* e) {
             << " constraint (signed distance " << dist[i] << ") at time " << time
             << "; at the start of a run this means it was placed inside: check the initial "
                "positions; later, strengthen the node-wall interaction or reduce the time step";
-        throw SimulationInstability(msg.str());
+        throw SimulationInstability("wall_penetration", msg.str())
+            .at_particle(p.id[i])
+            .in_cell(p.mol_id[i])
+            .at_time(time)
+            .with_value(dist[i]);
       }
       double exact;
       Vec3 normal;
@@ -379,7 +416,10 @@ Energies System::compute_energies() {
   return e;
 }
 
-void System::report_fast_particle(double dt) const {
+void System::report_fast_particle(double dt, std::uint64_t step) const {
+  const double half_box = 0.5 * box.length().minCoeff();
+  const bool pairs = nonbonded.max_range() > 0.0;
+  const double limit = pairs ? std::min(half_box, cells.skin) : half_box;
   // the particle that moved farthest in this step (fixed coordinates do not move)
   const auto& p = particles;
   auto drift2 = [&](std::size_t i) {
@@ -395,12 +435,17 @@ void System::report_fast_particle(double dt) const {
       fastest = i;
   std::ostringstream msg;
   msg << "the integration is unstable: particle " << p.id[fastest] << " moved "
-      << std::sqrt(drift2(fastest)) << " in one time step (more than half the box length, "
-      << 0.5 * box.length().minCoeff() << ") to time " << time + dt << ", velocity ("
-      << p.vel[fastest].transpose()
+      << std::sqrt(drift2(fastest)) << " in one time step (more than "
+      << (limit < half_box ? "the skin of the pair lists, " : "half the box length, ") << limit
+      << ") to time " << time + dt << ", velocity (" << p.vel[fastest].transpose()
       << "). Reduce the time step or the stiffness of the interactions (bonds, membrane "
          "moduli, contacts, coupling gamma). The positions are those after this step's drift";
-  throw SimulationInstability(msg.str());
+  SimulationInstability error("particle_jump", msg.str());
+  error.step = static_cast<long long>(step);
+  throw error.at_particle(p.id[fastest])
+      .in_cell(p.mol_id[fastest])
+      .at_time(time + dt)
+      .with_value(std::sqrt(drift2(fastest)));
 }
 
 void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
@@ -456,7 +501,13 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // A particle that moves half the box in one step has certainly blown up
   // (a stiff bond or membrane with too long a time step): stopped here,
   // long before its energy overflows, with its id and speed.
-  const double step_limit2 = 0.25 * std::pow(box.length().minCoeff(), 2);
+  // With pair contacts, a step longer than the skin is one too: the pair
+  // lists are rebuilt at every such step, and a node moving a skin (0.4 um
+  // by default, 4 m/s at a step of 0.1 us against the mm/s of cells in flow)
+  // per step has left the physics well before.
+  const double half_box2 = 0.25 * std::pow(box.length().minCoeff(), 2);
+  const double step_limit2 =
+      nonbonded.max_range() > 0.0 ? std::min(half_box2, cells.skin * cells.skin) : half_box2;
   // kicks half kicks (1 or 2), then the drift; returns the displacement test
   // (1: some particle moved beyond the skin or a re-sort is due anyway, 0:
   // none) or -1 when a position is not finite (prepare_step then names it)
@@ -505,8 +556,8 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     }
     if (step2 > step_limit2 && !runaway) {
       if (m_spread.active)
-        return -3; // raised on every rank in prepare_step
-      report_fast_particle(dt);
+        return -3;                              // raised on every rank in prepare_step
+      report_fast_particle(dt, step_count + 1); // the drift of the next step
     }
     return runaway ? -1 : (!x0 || worst2 > limit2) ? 1 : 0;
   };
@@ -533,60 +584,79 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // until the run ends normally the forces are those of some step in
   // between, or partial after an exception: a later run recomputes them
   m_forces_valid = false;
-  int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
-  for (int step = 0; step < n_steps; ++step) {
-    ++step_count;
-    ++run_timings.steps; // begun (one cut short by an exception counts)
-    time += dt;
-    prepare_step(moved);
-    // after the fused pass the forces already hold the external forces
-    force_loop<false>(nullptr, step > 0 && moved >= 0, &run_timings);
-    const bool last = step + 1 == n_steps;
-    if (last)
-      second_kick();
-    if (m_lb && ++m_lb_substep >= lb_interval) {
-      m_lb_substep = 0;
-      try {
-        PhaseClock clock(true);
-        m_lb->step();
-        clock.lap(run_timings.lb_fluid);
-      } catch (const SimulationInstability& e) {
-        if (!last)
-          second_kick(); // leave the particles as a step that ended here
-        // a stiff coupling (gamma dt / m of order 1 and more) makes coupled
-        // particles and nodes overshoot: the fluid blows up, but the cause
-        // is gamma, which the fluid's message cannot know
-        const double max_half_kick =
-            n > 0 ? *std::max_element(half_kick.begin(), half_kick.end()) : 0.0;
-        const double stiffness = 2.0 * m_lb_coupling.params.gamma * max_half_kick;
-        if (m_lb_coupling.active && stiffness > 1.0)
-          throw SimulationInstability(
-              std::string(e.what()) +
-              ". The particle coupling may be the cause: gamma * time_step / mass = " +
-              format_number(stiffness) +
-              " (above about 1 particles and fluid overshoot); lower gamma or the time step");
-        throw;
-      } catch (...) {
-        if (!last)
-          second_kick(); // leave the particles as a step that ended here
-        throw;
-      }
-    }
-    // every 16 steps: the caller may end the run here (Ctrl-C), with the
-    // particles as a run that ended with this step leaves them
-    if (!last && interruption_point && (step & 15) == 15) {
-      try {
-        interruption_point();
-      } catch (...) {
-        // the state of a run that ended with this step: a later run goes
-        // on from here exactly as after run(k) (no force recomputation)
+  // an instability names the step and time it happened at (the throwers
+  // deep inside know neither)
+  struct ChecksDue {
+    bool& flag;
+    ~ChecksDue() { flag = false; }
+  } checks_due{m_checks_due};
+  try {
+    int moved = advance(std::integral_constant<int, 1>{}); // first half kick + drift
+    for (int step = 0; step < n_steps; ++step) {
+      ++step_count;
+      ++run_timings.steps; // begun (one cut short by an exception counts)
+      time += dt;
+      prepare_step(moved);
+      // the cells' checks (cell_checks): in the first step of a run (a bad
+      // start is named at once) and every 8th step, where they cost 1/8 of
+      // about 3 % of a step; a fold or a crossing lasts longer than that
+      m_checks_due = cell_checks && (step == 0 || (step_count & 7) == 0);
+      // after the fused pass the forces already hold the external forces
+      force_loop<false>(nullptr, step > 0 && moved >= 0, &run_timings);
+      const bool last = step + 1 == n_steps;
+      if (last)
         second_kick();
-        mark_forces_valid();
-        throw;
+      if (m_lb && ++m_lb_substep >= lb_interval) {
+        m_lb_substep = 0;
+        try {
+          PhaseClock clock(true);
+          m_lb->step();
+          clock.lap(run_timings.lb_fluid);
+        } catch (const SimulationInstability& e) {
+          if (!last)
+            second_kick(); // leave the particles as a step that ended here
+          // a stiff coupling (gamma dt / m of order 1 and more) makes coupled
+          // particles and nodes overshoot: the fluid blows up, but the cause
+          // is gamma, which the fluid's message cannot know
+          const double max_half_kick =
+              n > 0 ? *std::max_element(half_kick.begin(), half_kick.end()) : 0.0;
+          const double stiffness = 2.0 * m_lb_coupling.params.gamma * max_half_kick;
+          if (m_lb_coupling.active && stiffness > 1.0)
+            throw e.with_message(
+                std::string(e.what()) +
+                ". The particle coupling may be the cause: gamma * time_step / mass = " +
+                format_number(stiffness) +
+                " (above about 1 particles and fluid overshoot); lower gamma or the time step");
+          throw;
+        } catch (...) {
+          if (!last)
+            second_kick(); // leave the particles as a step that ended here
+          throw;
+        }
       }
+      // every 16 steps: the caller may end the run here (Ctrl-C), with the
+      // particles as a run that ended with this step leaves them
+      if (!last && interruption_point && (step & 15) == 15) {
+        try {
+          interruption_point();
+        } catch (...) {
+          // the state of a run that ended with this step: a later run goes
+          // on from here exactly as after run(k) (no force recomputation)
+          second_kick();
+          mark_forces_valid();
+          throw;
+        }
+      }
+      if (!last) // second half kick of this step, first one and drift of the next
+        moved = advance(std::integral_constant<int, 2>{});
     }
-    if (!last) // second half kick of this step, first one and drift of the next
-      moved = advance(std::integral_constant<int, 2>{});
+  } catch (SimulationInstability& e) {
+    if (e.step < 0) {
+      e.step = static_cast<long long>(step_count);
+      if (std::isnan(e.time))
+        e.time = time;
+    }
+    throw;
   }
   mark_forces_valid();
 }

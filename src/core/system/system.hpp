@@ -160,15 +160,26 @@ public:
   // --- integration ------------------------------------------------------------
   /** n velocity-Verlet steps, all in C++. */
   void integrate(int n_steps, bool recalc_forces = false, bool reuse_forces = false);
-  /** Throws SimulationInstability naming the fastest particle (a drift of
-   *  more than half the box in one step of length dt). */
-  [[noreturn]] void report_fast_particle(double dt) const;
+  /** Throws SimulationInstability naming the fastest particle (a drift, in
+   *  the given step, of
+   *  more than half the box, or with pair contacts more than the skin, in
+   *  one step of length dt). */
+  [[noreturn]] void report_fast_particle(double dt, std::uint64_t step) const;
+  /** Throws SimulationInstability ("membrane_crossing") when the pair's two
+   *  membrane nodes lie each behind the other's membrane. */
+  void check_membrane_crossing(const PairContext& c, int id_i, int id_j) const;
   /** Called by integrate every 16 steps, where the particles are as at the
    *  end of a step; an exception it throws ends the run there, in the state
    *  of a run asked for that many steps (forces valid: a later run goes on
    *  bit for bit as after a split run). The Python binding uses it for
    *  Ctrl-C. Empty: never called. */
   std::function<void()> interruption_point;
+  /** The cells' checks in the steps of a run, the first and every 8th
+   *  (inverted triangles, membranes crossed,
+   *  collapsed or exploded volumes: SimulationInstability; volume or surface
+   *  drift beyond membranes.drift_tolerance: a note, see take_drift_notes).
+   *  Force and energy evaluations outside a run's steps are not checked. */
+  bool cell_checks = true;
   /** Where the runs' time went (wall clock, seconds), summed over the runs
    *  since the System was made or the last reset (LAMMPS prints such a
    *  breakdown after each run). total: all of integrate(); the phases are
@@ -319,6 +330,7 @@ private:
   std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;
+  bool m_checks_due = false; ///< the cells' checks run in this step (cell_checks)
   int m_lb_substep = 0;
 };
 

@@ -569,7 +569,7 @@ void System::raise_agreed(const std::exception_ptr& local) const {
     try {
       std::rethrow_exception(local);
     } catch (const SimulationInstability& e) {
-      message = e.what();
+      message = e.pack();
     } catch (const InputError& e) {
       message = e.what();
       kind = 1;
@@ -584,7 +584,7 @@ void System::raise_agreed(const std::exception_ptr& local) const {
   message.resize(static_cast<std::size_t>(length));
   MPI_Bcast(message.data(), length, MPI_CHAR, failing, m_spread.comm.comm());
   if (kind == 0)
-    throw SimulationInstability(message);
+    throw SimulationInstability::unpack(message);
   if (kind == 1)
     throw InputError(message);
   throw std::runtime_error(message);

@@ -36,7 +36,7 @@ from . import constraints
 from . import lb
 from . import lbboundaries
 from . import system as _system_module
-from .system import System
+from .system import CellDriftWarning, System
 
 __version__ = "0.1.0"
 
@@ -70,6 +70,6 @@ def _abort_all_ranks(exc_type, exc, tb):
 if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
-__all__ = ["System", "SimulationInstability", "has_features", "assert_features", "features",
+__all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
            "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries",
            "rank", "size", "comm"]

@@ -374,6 +374,25 @@ void bind_system(py::module_& m) {
              s.set_langevin({true, kT, gamma, seed});
            })
       .def("langevin_off", &System::langevin_off)
+      // the cells' checks in a run (System::cell_checks, Membranes)
+      .def_readwrite("cell_checks", &System::cell_checks)
+      .def_property(
+          "cell_drift_tolerance", [](const System& s) { return s.membranes.drift_tolerance; },
+          [](System& s, double tolerance) {
+            if (!(tolerance >= 0.0) || !std::isfinite(tolerance))
+              throw InputError("cell_drift_tolerance must be a finite number >= 0 (a fraction, "
+                               "e.g. 0.05; 0 switches the warnings off), got " +
+                               format_number(tolerance));
+            s.membranes.drift_tolerance = tolerance;
+          })
+      .def("take_drift_notes",
+           [](System& s) {
+             // every rank's notes (each cell is checked by the rank that owns it)
+             std::vector<py::tuple> out;
+             for (const auto& n : s.membranes.take_drift_notes())
+               out.push_back(py::make_tuple(n.mol_id, n.quantity, n.ratio, n.time, n.step));
+             return out;
+           })
       .def_property_readonly("langevin", [](const System& s) { return s.langevin(); })
       // integration
       // The run keeps the GIL: no other Python thread can change the system

@@ -110,7 +110,21 @@ class Integrator:
                                      Param("recalc_forces", "bool"), Param("reuse_forces", "bool")],
                   {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces})
         self._system._check_ready()
-        self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"], _interruptible())
+        if not self._system.__dict__.get("_settings_checked"):
+            # once, at the first run: the scene's choices against their
+            # measured limits, warnings only (system.check_settings())
+            self._system.__dict__["_settings_checked"] = True
+            from .settings_check import check_settings
+            try:
+                check_settings(self._system, warn=True)
+            except Exception as e:  # a check must never stop a run
+                import warnings
+                warnings.warn(f"check_settings could not check the scene: {e}", RuntimeWarning)
+        try:
+            self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"],
+                                         _interruptible())
+        finally:
+            self._system._warn_drifted_cells()
 
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
@@ -325,13 +339,18 @@ class Analysis:
         return (sel.pos * m[:, None]).sum(axis=0) / m.sum()
 
 
+class CellDriftWarning(RuntimeWarning):
+    """A cell's volume or surface drifted beyond system.cell_drift_tolerance."""
+
+
 class System:
     """A simulation: box, particles, interactions, fluid, integrator.
 
     ``System(box_l=[Lx, Ly, Lz], periodicity=[True, True, True], time_step=None)``
     """
 
-    _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects"}
+    _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects",
+                   "cell_checks", "cell_drift_tolerance"}
 
     def _core_fluid(self):
         """The active fluid's C++ object, or None."""
@@ -389,6 +408,13 @@ class System:
         elif name == "min_global_cut":
             self.__dict__[name] = parse("System", [Param("min_global_cut", "float", check=non_negative)],
                                         {name: value})[name]
+        elif name == "cell_checks":
+            self._core.cell_checks = parse("System", [Param("cell_checks", "bool")],
+                                           {name: value})[name]
+        elif name == "cell_drift_tolerance":
+            self._core.cell_drift_tolerance = parse(
+                "System", [Param("cell_drift_tolerance", "float", check=non_negative)],
+                {name: value})[name]
         elif name == "max_oif_objects":
             self.__dict__[name] = parse("System", [Param("max_oif_objects", "int", check=non_negative)],
                                         {name: value})[name]
@@ -410,6 +436,46 @@ class System:
     @property
     def time(self):
         return self._core.time
+
+    @property
+    def cell_checks(self):
+        """Whether the steps of a run check the cells (default True): an
+        inverted triangle or a volume below 1/4 or above 4 times the relaxed
+        one raises SimulationInstability; a volume or surface that drifts
+        beyond ``cell_drift_tolerance`` warns (CellDriftWarning)."""
+        return self._core.cell_checks
+
+    @property
+    def cell_drift_tolerance(self):
+        """Relative drift of a cell's volume or surface from its relaxed value
+        that warns, once per cell and quantity (default 0.05; 0: never)."""
+        return self._core.cell_drift_tolerance
+
+    def check_settings(self):
+        """Each modelling choice of the scene -- relaxation time, Mach number,
+        precision, cells against agrid, mesh against agrid, time step against
+        the membrane's stiffness, coupling, contacts -- with its value, the
+        measured limit, the error to expect (doc/accuracy.md) and whether a
+        cheaper setting would do. Returns a SettingsReport (a list of
+        Setting; print it for the table). Collective under MPI."""
+        from .settings_check import check_settings
+        return check_settings(self)
+
+    def _warn_drifted_cells(self):
+        """CellDriftWarning for each note of the last run, on every rank (a
+        cell is checked by the rank that owns it)."""
+        import warnings
+        from . import comm, size
+        notes = self._core.take_drift_notes()
+        if size > 1:
+            notes = sorted(n for part in comm.allgather(notes) for n in part)
+        for mol_id, quantity, ratio, time, step in notes:
+            warnings.warn(
+                f"cell with mol_id {mol_id}: its {quantity} drifted to {ratio:.4g} times the "
+                f"relaxed value (tolerance {self.cell_drift_tolerance:g}) at step {step}, time "
+                f"{time:g}; a cell squeezed by the flow or poorly held by its moduli (raise kv or "
+                f"kag, lower the flow or the time step; system.cell_drift_tolerance sets the "
+                f"threshold)", CellDriftWarning, stacklevel=3)
 
     def __repr__(self):
         return (f"System(box_l={self.box_l.tolist()}, periodicity={self.periodicity}, "

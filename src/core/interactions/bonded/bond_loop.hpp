@@ -63,7 +63,7 @@ void for_each_bond(const IA& ia, const BondGroup& group, const ParticleStore& p,
       for (int k = 0; k < K; ++k)
         msg << ' ' << ids[k];
       msg << " broke at time " << time << " (stretched beyond its cutoff or degenerate)";
-      throw SimulationInstability(msg.str());
+      throw SimulationInstability("bond_broken", msg.str()).at_particle(ids[0]).at_time(time);
     }
     sink(idx, f, energy, in);
   }

@@ -363,6 +363,9 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
     ++counts.compiles;
     m_key = key;
   }
+  m_model.shape_checks = shape_checks;
+  m_model.drift_tolerance = drift_tolerance;
+  m_model.step = step;
   if (!m_model.empty())
     m_model.evaluate(p, box, time, p.force.data(), p.normal.data(), nullptr, counts);
 }

@@ -50,6 +50,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -132,8 +133,25 @@ struct Group {
   int n_cells = 1;                         ///< lanes that are distinct cells
 };
 
+/** A cell whose volume or surface left the tolerance (noted once per cell
+ *  and quantity). */
+struct DriftNote {
+  int mol_id;
+  const char* quantity; ///< "volume" or "surface"
+  double ratio;         ///< to the relaxed value
+  double time;
+  long long step;
+};
+
 class Model {
 public:
+  /** Checks of the time step (not of analysis): inverted triangles, volumes
+   *  collapsed or exploded (errors), volume and surface drift (notes). */
+  bool shape_checks = false;
+  double drift_tolerance = 0.05; ///< relative; 0: no notes
+  long long step = -1;           ///< the MD step evaluated (for the notes)
+  std::vector<DriftNote> drift_notes;
+
   /** Builds the tables from the membrane bonds of `bonded` chosen by `select`.
    *  Throws SimulationInstability for a bond of a missing particle,
    *  InputError for a cell with two OifGlobalForces interactions. */
@@ -162,7 +180,7 @@ private:
    *  (positions as gathered in lane `lane` of the workspace). */
   template <class T>
   [[noreturn]] void report_failure(const Group& group, int lane, const ParticleStore& p,
-                                   double time) const;
+                                   double time, double volume) const;
 
   std::vector<Topology> m_topologies;
   std::vector<Cell> m_cells;
@@ -170,6 +188,8 @@ private:
   std::vector<int> m_node_index;   ///< cell node -> local particle index
   bool m_shared_nodes = false;     ///< a particle is a node of two cells (normals summed)
   std::vector<int> m_normal_nodes; ///< local indices that get a normal, each once
+  /// per mol_id: bit 1 volume, 2 surface noted (kept across compiles)
+  std::unordered_map<int, std::uint8_t> m_drift_warned;
 
   /** Scratch of the pass for one scalar type. */
   template <class T> struct Workspace {
@@ -192,6 +212,13 @@ public:
    *  (false; tests compare the two, bit for bit). */
   bool lanes = true;
   PassCounts counts;
+  /** The time step's shape checks (Model::shape_checks; System sets it for
+   *  the steps of a run) and the drift tolerance (0: none). */
+  bool shape_checks = false;
+  double drift_tolerance = 0.05;
+  long long step = -1; ///< the MD step evaluated (for the notes)
+  /** The drift notes since the last call. */
+  std::vector<DriftNote> take_drift_notes() { return std::exchange(m_model.drift_notes, {}); }
 
   /** The time step's membrane phase: forces of all membrane bonds added to
    *  the particles, node normals written. bonds_version: the System's count

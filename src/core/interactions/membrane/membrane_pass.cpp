@@ -36,6 +36,14 @@ namespace {
  *  factors, then the forces) let the iterations overlap. */
 constexpr int kEdgeBlock = 16;
 
+/** Limits past which a cell is broken, not merely deformed: a pair of
+ *  triangles turned by more than 150 degrees from its relaxed angle
+ *  (cos^2 150 = 3/4) is an inverted triangle; a volume below a quarter or
+ *  above four times V0 has collapsed or exploded (a red blood cell keeps
+ *  its volume within a few per cent). */
+constexpr double inverted_cos2 = 0.75;
+constexpr double volume_collapsed = 0.25, volume_exploded = 4.0;
+
 /** Stretching, viscosity and bending of every edge of the topology, added
  *  to the node forces f; x, v: the nodes' positions and velocities. With
  *  energies (non-null) the edges' stretching and bending energies are summed
@@ -43,7 +51,7 @@ constexpr int kEdgeBlock = 16;
  *  degenerate wing triangle. */
 template <class T, bool neo, bool visc, bool bend, class Node>
 Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
-                  T* stretching_energy_sum, T* bending_energy_sum) {
+                  T* stretching_energy_sum, T* bending_energy_sum, bool shape_checks) {
   struct Factors {
     T e[3], n1[3], n2[3], coefficient;
     BendingFactors<T> bending;
@@ -92,6 +100,12 @@ Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
         const Wings<T> wings(e, u, w);
         bad |= not_positive(wings.n1_2) | not_positive(wings.n2_2);
         const Deviation<T> dev(bending, wings.y(l, w), wings.x());
+        // an inverted triangle: the pair turned by more than 150 degrees
+        // from its relaxed angle (cos^2 150 = 3/4; (sine, cosine) have the
+        // length |n1| |n2|), a fold no smooth membrane makes
+        if (shape_checks)
+          bad |= (dev.cosine < T{}) &
+                 (dev.cosine * dev.cosine > inverted_cos2 * (wings.n1_2 * wings.n2_2));
         const Mask<T> small = dev.small();
         den[2] = select<T>(small, dev.cosine, splat<T>(1.0));
         den[3] = wings.n1_2 * wings.n2_2;
@@ -134,10 +148,10 @@ Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
 /** edge_pass for the terms the topology has (one instantiation each). */
 template <class T, class Node>
 Mask<T> edge_pass_for(const Topology& t, const Node* x, const Node* v, Node* f, T* stretching_sum,
-                      T* bending_sum) {
+                      T* bending_sum, bool shape_checks) {
   auto with = [&](auto neo, auto visc, auto bend) {
     return edge_pass<T, decltype(neo)::value, decltype(visc)::value, decltype(bend)::value>(
-        t, x, v, f, stretching_sum, bending_sum);
+        t, x, v, f, stretching_sum, bending_sum, shape_checks);
   };
   using yes = std::true_type;
   using no = std::false_type;
@@ -243,6 +257,29 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
   const T cell_volume = volume_sum / 6.0;
   const T sign = orientation_sign(cell_volume);
   T global_area_energy{}, volume_energy{};
+  // a volume that collapsed or exploded (where the volume term gives V0);
+  // a volume or surface that drifted beyond the tolerance: noted once per
+  // cell (the System warns after the run)
+  if (shape_checks && volume_forces) {
+    const T ratio = abs_of(cell_volume) / select<T>(vol.kv != T{}, vol.volume0, splat<T>(1.0));
+    bad |= (vol.kv != T{}) & ((ratio < volume_collapsed) | (ratio > volume_exploded));
+  }
+  if (shape_checks && drift_tolerance > 0.0 && t.closed)
+    for (int j = 0; j < group.n_cells; ++j) {
+      const Cell& cell = m_cells[group.cell[j]];
+      auto note = [&](const char* quantity, double value, double relaxed, std::uint8_t bit) {
+        const double ratio = std::abs(value) / relaxed;
+        std::uint8_t& warned = m_drift_warned[cell.mol_id];
+        if (!(warned & bit) && std::abs(ratio - 1.0) > drift_tolerance) {
+          warned |= bit;
+          drift_notes.push_back({cell.mol_id, quantity, ratio, time, step});
+        }
+      };
+      if (cell.volume.kv != 0.0)
+        note("volume", lane(cell_volume, j), cell.volume.volume0, 1);
+      if (cell.global_area.kag != 0.0)
+        note("surface", lane(area_sum, j), cell.global_area.area0, 2);
+    }
   const T area_factor =
       global_area_factor(global, area_sum, with_reports ? &global_area_energy : nullptr);
   const T vol_factor =
@@ -263,7 +300,7 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
   T stretching_energy_sum{}, bending_energy_sum{};
   if (t.edges)
     bad |= edge_pass_for<T>(t, x, v, f, with_reports ? &stretching_energy_sum : nullptr,
-                            with_reports ? &bending_energy_sum : nullptr);
+                            with_reports ? &bending_energy_sum : nullptr, shape_checks);
   // per node: the volume force along its sum of N, all finite
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d) {
@@ -273,7 +310,7 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
     }
   for (int j = 0; j < group.n_cells; ++j)
     if (lane_set<T>(bad, j))
-      report_failure<T>(group, j, p, time);
+      report_failure<T>(group, j, p, time, lane(cell_volume, j));
 
   // forces and normals to the particles
   for (int j = 0; j < group.n_cells; ++j) {
@@ -362,7 +399,8 @@ void Model::gather(const Cell& cell, int j, const ParticleStore& p, const BoxGeo
 }
 
 template <class T>
-void Model::report_failure(const Group& group, int j, const ParticleStore& p, double time) const {
+void Model::report_failure(const Group& group, int j, const ParticleStore& p, double time,
+                           double volume) const {
   using Node = typename Workspace<T>::Node;
   const Cell& cell = m_cells[group.cell[j]];
   const Topology& t = m_topologies[cell.topology];
@@ -399,7 +437,29 @@ void Model::report_failure(const Group& group, int j, const ParticleStore& p, do
           << ' ' << pid(t.edge_c[k]) << ' ' << pid(t.edge_d[k]) << where(cell.local_bond_id)
           << " broke at time " << time << ": "
           << (zero_edge ? "its edge has zero length" : "one of its triangles has zero area");
-      throw SimulationInstability(msg.str());
+      throw SimulationInstability("triangle_collapsed", msg.str())
+          .at_particle(pid(t.edge_b[k]))
+          .in_cell(cell.mol_id)
+          .at_time(time)
+          .with_value(0.0);
+    }
+    if (t.bend) {
+      const double l = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+      const Deviation<double> dev(t.bending[k], wings.y(l, w), wings.x());
+      if (dev.cosine < 0.0 && dev.cosine * dev.cosine > inverted_cos2 * wings.n1_2 * wings.n2_2) {
+        const double turned = std::abs(std::atan2(dev.sine, dev.cosine)) * 180.0 / M_PI;
+        msg << "an inverted triangle in the cell with mol_id " << cell.mol_id
+            << ": the triangles of particles " << pid(t.edge_b[k]) << ' ' << pid(t.edge_c[k])
+            << " and " << pid(t.edge_a[k]) << ", " << pid(t.edge_d[k]) << " turned by " << turned
+            << " degrees from their relaxed angle at time " << time
+            << " (the membrane folded through itself: reduce the time step or the forces on "
+               "the cell, or raise kb)";
+        throw SimulationInstability("triangle_inverted", msg.str())
+            .at_particle(pid(t.edge_a[k]))
+            .in_cell(cell.mol_id)
+            .at_time(time)
+            .with_value(turned);
+      }
     }
   }
   const bool closed_terms = cell.global_area.kag != 0.0 || cell.volume.kv != 0.0;
@@ -415,7 +475,27 @@ void Model::report_failure(const Group& group, int j, const ParticleStore& p, do
           << pid(t.tri_v0[q]) << ' ' << pid(t.tri_v1[q]) << ' ' << pid(t.tri_v2[q])
           << where(local ? cell.local_bond_id : cell.global_bond_id) << " has zero area at time "
           << time << " (a collapsed triangle: reduce the time step or the forces on the cell)";
-      throw SimulationInstability(msg.str());
+      throw SimulationInstability("triangle_collapsed", msg.str())
+          .at_particle(pid(t.tri_v0[q]))
+          .in_cell(cell.mol_id)
+          .at_time(time)
+          .with_value(0.0);
+    }
+  }
+  if (t.closed && cell.volume.kv != 0.0) {
+    const double ratio = std::abs(volume) / cell.volume.volume0;
+    if (ratio < volume_collapsed || ratio > volume_exploded) {
+      const bool collapsed = ratio < volume_collapsed;
+      msg << "the volume of the cell with mol_id " << cell.mol_id << " "
+          << (collapsed ? "collapsed" : "exploded") << " to " << ratio
+          << " times its relaxed volume " << cell.volume.volume0 << " at time " << time
+          << (collapsed ? " (crushed: reduce the flow or the forces on it, or raise kv)"
+                        : " (blown up: reduce the time step or the moduli)");
+      throw SimulationInstability(collapsed ? "volume_collapsed" : "volume_exploded", msg.str())
+          .in_cell(cell.mol_id)
+          .at_particle(pid(0))
+          .at_time(time)
+          .with_value(ratio);
     }
   }
   int worst = 0;
@@ -431,7 +511,10 @@ void Model::report_failure(const Group& group, int j, const ParticleStore& p, do
       << " (bonded interactions: local " << cell.local_bond_id << ", global " << cell.global_bond_id
       << ") are not finite at particle " << pid(worst) << " at time " << time
       << ": the cell has blown up (or its triangles collapsed); reduce the time step or the moduli";
-  throw SimulationInstability(msg.str());
+  throw SimulationInstability("cell_blown_up", msg.str())
+      .at_particle(pid(worst))
+      .in_cell(cell.mol_id)
+      .at_time(time);
 }
 
 void Model::evaluate(const ParticleStore& p, const BoxGeometry& box, double time, Vec3* force,

@@ -1,0 +1,76 @@
+"""system.check_settings(): each choice against its measured limit
+(doc/accuracy.md). Scenes past each limit get the warning, the same scene
+within the limits does not; the first integrator.run warns once."""
+import unittest
+import warnings
+
+import lbmd
+import lbmd.lb
+import oif
+from lbmd.settings_check import SettingsWarning
+
+
+def scene(visc=1.5, tau=0.1, dt=0.1, gamma=1.5, ks=0.005, contact=True, cells=2):
+    s = lbmd.System(box_l=[40.0, 20.0, 20.0])
+    s.time_step = dt
+    lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=visc, tau=tau)
+    s.actors.add(lbf)
+    ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(4.0, 4.0, 4.0), normal=True,
+                         ks=ks, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
+    # the script keeps its cells (check_settings sees the living OifCells)
+    cell_list = [oif.OifCell(cell_type=ct, particle_type=0, origin=[10.0 + 15 * k, 10.0, 10.0])
+                 for k in range(cells)]
+    if contact:
+        s.non_bonded_inter[0, 0].membrane_collision.set_params(a=1e-4, n=1.2, cutoff=0.5)
+    s.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
+    return s, lbf, cell_list
+
+
+def warned(report):
+    return sorted(s.name.split(": ")[-1] for s in report.warnings())
+
+
+class CheckSettings(unittest.TestCase):
+
+    def test_within_limits_quiet(self):
+        s, _, kept = scene()
+        report = s.check_settings()
+        self.assertEqual(report.warnings(), [], str(report))
+        names = " ".join(x.name for x in report)
+        for what in ("relaxation time", "Mach", "precision", "radius / agrid", "mean edge / agrid",
+                     "time step against ks", "gamma * time_step / mass"):
+            self.assertIn(what, names)
+        self.assertIn("expect", str(report))
+
+    def test_each_limit(self):
+        # tau* = 3 visc tau / agrid^2 + 1/2 = 0.53 < 0.55
+        s, _, kept = scene(visc=0.1, tau=0.1, dt=0.1)
+        self.assertIn("relaxation time tau* = 3 visc tau / agrid^2 + 1/2", warned(s.check_settings()))
+        # Mach 0.35 > 0.2
+        s, lbf, kept = scene()
+        c_s = 1.0 / 0.1 / 3 ** 0.5
+        lbf[5, 5, 5].velocity = [0.35 * c_s, 0.0, 0.0]
+        self.assertIn("Mach number (fastest node now)", warned(s.check_settings()))
+        # ks so stiff that dt = 0.1 is beyond half of 2 sqrt(m / 6 ks): ks 100
+        s, _, kept = scene(ks=100.0)
+        self.assertIn("time step against ks", warned(s.check_settings()))
+        # gamma dt / m = 1.5 * 1.0 = 1.5 > 1
+        s, _, kept = scene(gamma=1.5, dt=1.0, tau=1.0, visc=0.15)
+        self.assertIn("coupling gamma * time_step / mass", warned(s.check_settings()))
+        # two cells, no contact between their type
+        s, _, kept = scene(contact=False)
+        self.assertIn("contact between cell types 0 and 0", warned(s.check_settings()))
+
+    def test_first_run_warns_once(self):
+        s, _, kept = scene(contact=False)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            s.integrator.run(2)
+            s.integrator.run(2)
+        mine = [w for w in caught if issubclass(w.category, SettingsWarning)]
+        self.assertEqual(len(mine), 1, [str(w.message) for w in caught])
+        self.assertIn("pass through each other", str(mine[0].message))
+
+
+if __name__ == "__main__":
+    unittest.main()
