@@ -16,8 +16,9 @@ charts(results, outdir)):
 
 Cost is the CPU time (time.process_time) of the runs on one thread, with
 the node-update counts beside it in the CSV. The figures and the advice
-drawn from them: doc/accuracy.md. The default fluid part takes about 5 min
-on a 2-core Xeon VM, --quick about 1 min.
+drawn from them: doc/accuracy.md. The default fluid part takes about 3 min
+(95 s CPU) on the 2-core Xeon VM in double precision, --quick 20 s; single
+precision, where LBFluid offers it, doubles that.
 """
 import argparse
 import importlib

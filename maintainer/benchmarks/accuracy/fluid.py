@@ -348,7 +348,27 @@ def run(quick=False, precisions=None, cases=None, log=print):
             out[f"fluid_{name}"] = rows
         if log and name == "stability" and rows:
             n_stable = sum(r["stable"] for r in rows)
-            log(f"stability: {n_stable} of {len(rows)} points stable")
+            advised = [r for r in rows if r["in_advice"]]
+            broken = [f"{r['collision']} {r['precision']} tau {r['tau_lattice']:.4g} Ma {r['mach']:g}"
+                      for r in advised if not r["stable"]]
+            log(f"stability: {n_stable} of {len(rows)} points stable; inside the advice "
+                f"({ADVICE_TAU_MIN:g} <= tau_lattice <= {ADVICE_TAU_MAX:g}, Ma <= {ADVICE_MACH:g}): "
+                f"{len(advised) - len(broken)} of {len(advised)} stable" +
+                (f", unstable: {'; '.join(broken)}" if broken else ""))
+            for col, prec in sorted({(r["collision"], r["precision"]) for r in rows}):
+                edges = []
+                for mach in sorted({r["mach"] for r in rows}):
+                    sel = sorted([r for r in rows if r["collision"] == col and r["precision"] == prec
+                                  and r["mach"] == mach], key=lambda r: -r["tau_lattice"])
+                    if not sel:
+                        continue
+                    edge = None  # smallest tau from which every larger one is stable
+                    for r in sel:
+                        if not r["stable"]:
+                            break
+                        edge = r["tau_lattice"]
+                    edges.append(f"Ma {mach:g}: {edge:.4g}" if edge else f"Ma {mach:g}: none")
+                log(f"  {col} {prec}, stable from tau_lattice " + ", ".join(edges))
         if log:
             log(f"[{name}: {time.perf_counter() - t0:.1f} s wall]")
     return out
