@@ -504,10 +504,18 @@ std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) 
             [](const PlaceRun& a, const PlaceRun& b) { return a.first < b.first; });
   std::vector<PlaceRun> runs;
   for (const PlaceRun& p : pairs) {
-    if (!runs.empty()) {
+    if (!runs.empty() && p.term == runs.back().term) {
       PlaceRun& last = runs.back();
-      if (p.first == last.first + last.length && p.second == last.second + last.length &&
-          p.term == last.term) {
+      // a second pair sets the step (the next place in memory order
+      // first: contiguous wherever a row continues), the others follow it
+      if (last.length == 1 && p.first > last.first && p.second > last.second &&
+          p.first - last.first == p.second - last.second) {
+        last.step = p.first - last.first;
+        ++last.length;
+        continue;
+      }
+      if (last.length > 1 && p.first == last.first + last.length * last.step &&
+          p.second == last.second + last.length * last.step) {
         ++last.length;
         continue;
       }

@@ -486,15 +486,18 @@ private:
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
   /// Pairs of places in m_f that a fix-up after the update copies between
-  /// (with a term subtracted), as runs: `length` consecutive places from
+  /// (with a term subtracted), as runs: `length` places `step` apart from
   /// `first` and from `second`. Walls and periodic faces give runs of whole
-  /// rows along x, so the fix-ups are vectorised copies instead of a list of
-  /// scattered single places (their order does not matter: no place is
-  /// written twice, none read after another pair wrote it).
+  /// rows along x (step 1), so the fix-ups are vectorised copies instead of
+  /// a list of scattered single places; the faces normal to x give columns
+  /// along y (step: a row), one descriptor each instead of one per place
+  /// (their order does not matter: no place is written twice, none read
+  /// after another pair wrote it).
   struct PlaceRun {
     std::size_t first, second;
     std::size_t length;
     double term;
+    std::size_t step = 1;
   };
   /** Single pairs (length 1) merged into runs; sorts them by `first`. */
   static std::vector<PlaceRun> merge_runs(std::vector<PlaceRun> pairs);

@@ -544,8 +544,14 @@ void LBFluid::apply_runs(Real* f, const std::vector<PlaceRun>& runs, bool into_f
     const Real* __restrict from = f + (into_first ? r.second : r.first);
     // in double, rounded to Real once; term 0 in the halo: x - 0.0 is x,
     // a float too (through double and back)
-    for (std::size_t i = 0; i < r.length; ++i)
-      to[i] = static_cast<Real>(from[i] - r.term);
+    if (r.step == 1) {
+      for (std::size_t i = 0; i < r.length; ++i)
+        to[i] = static_cast<Real>(from[i] - r.term);
+    } else {
+      const std::size_t step = r.step;
+      for (std::size_t i = 0; i < r.length; ++i)
+        to[i * step] = static_cast<Real>(from[i * step] - r.term);
+    }
   }
 }
 
