@@ -212,8 +212,9 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
     static_assert(block == 32, "field_valid_bits32 gives the field's marks of 32 nodes");
     // the hardware prefetcher does not keep 19 streams far enough ahead:
     // request the rows `distance` nodes ahead into L2 (in the next run when
-    // this one ends; runs are in memory order), one request per cache line
-    constexpr std::size_t distance = 96;
+    // this one ends; runs are in memory order), one request per cache line;
+    // 768 bytes ahead per stream in either precision
+    constexpr std::size_t distance = 96 * sizeof(double) / sizeof(Real);
     constexpr int per_line = 64 / sizeof(Real);
     const Run* next_run = &r + 1 < m_runs.data() + m_runs.size() ? &r + 1 : nullptr;
     // post-collision values, already rounded to the stored type
