@@ -5,14 +5,16 @@ channel and a 40 %-solid channel, with 1 and 2 threads, and the same figure
 as a fraction of a memory-bandwidth roofline measured on the spot.
 
     pyoif maintainer/benchmarks/lb_mlups.py [--threads 1 2] [--sizes 32 64 128 192]
-        [--precision double single] [--repeats 3] [--periodic-only] [--seconds 2]
+        [--precision double single] [--repeats 10] [--periodic-only] [--seconds 2]
         [--csv lb_mlups.csv]
 
 Precision: the populations stored as double or as float
 (LBFluid(single_precision=True)). Both fluids of a scene are built first
 and timed interleaved (double, single, double, single, ... --repeats
 rounds, the best of each kept), so that a machine shared with other jobs
-slows both alike; the ratio single / double is printed per scene.
+slows both alike; the ratio single / double is printed per scene. Under
+load, short timings and many rounds (--seconds 0.6 --repeats 12) give the
+steadiest ratio.
 
 Roofline: STREAM-like copy bandwidth B (b[i] = a[i] over 2 x 256 MiB,
 counted as STREAM does, 16 bytes per element) divided by the bytes the
@@ -101,7 +103,7 @@ def main():
     ap.add_argument("--sizes", type=int, nargs="+", default=[32, 64, 128, 192])
     ap.add_argument("--precision", nargs="+", choices=("double", "single"),
                     default=["double", "single"])
-    ap.add_argument("--repeats", type=int, default=3, help="interleaved timing rounds")
+    ap.add_argument("--repeats", type=int, default=10, help="interleaved timing rounds")
     ap.add_argument("--periodic-only", action="store_true", help="skip the walled channels")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--csv", default="lb_mlups.csv")
