@@ -5,7 +5,16 @@ channel and a 40 %-solid channel, with 1 and 2 threads, and the same figure
 as a fraction of a memory-bandwidth roofline measured on the spot.
 
     pyoif maintainer/benchmarks/lb_mlups.py [--threads 1 2] [--sizes 32 64 128 192]
-        [--seconds 2] [--csv lb_mlups.csv]
+        [--precision double single] [--repeats 10] [--periodic-only] [--seconds 2]
+        [--csv lb_mlups.csv]
+
+Precision: the populations stored as double or as float
+(LBFluid(single_precision=True)). Both fluids of a scene are built first
+and timed interleaved (double, single, double, single, ... --repeats
+rounds, the best of each kept), so that a machine shared with other jobs
+slows both alike; the ratio single / double is printed per scene. Under
+load, short timings and many rounds (--seconds 0.6 --repeats 12) give the
+steadiest ratio.
 
 Roofline: STREAM-like copy bandwidth B (b[i] = a[i] over 2 x 256 MiB,
 counted as STREAM does, 16 bytes per element) divided by the bytes the
@@ -16,7 +25,8 @@ once and written back to the same cache lines, so there is no
 write-allocate traffic either (no density/velocity fields); the halo
 exchange and the bounce-back fix-up add surface terms, and with particle
 coupling the force field adds 24 bytes read + 24 written (not in these
-scenes). The copy counts 16 bytes per element as STREAM does; a copy whose
+scenes). In single precision the populations take 4 bytes: 152 bytes per
+node, twice the roofline in MLUPS. The copy counts 16 bytes per element as STREAM does; a copy whose
 stores allocate lines moves 24, which is why a kernel that does not can
 exceed 100 % of this roofline.
 """
@@ -31,14 +41,18 @@ from lbmd import _lbmd, lb, lbboundaries, shapes
 
 from benchmark_csv import write_rows
 
-BYTES_PER_NODE = 2 * 19 * 8
+BYTES_PER_VALUE = {"double": 8, "single": 4}
 
 
-def make_fluid(shape, threads, walls=None):
+def bytes_per_node(precision):
+    return 2 * 19 * BYTES_PER_VALUE[precision]
+
+
+def make_fluid(shape, threads, walls=None, precision="double"):
     system = lbmd.System(box_l=list(shape))
     system.time_step = 0.1
     fluid = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, n_threads=threads,
-                       ext_force_density=[1e-5, 0, 0])
+                       ext_force_density=[1e-5, 0, 0], single_precision=precision == "single")
     system.actors.add(fluid)
     if walls == "z":  # the paper's kind of channel (cell_cost.py's scene), fits in the L3 cache
         system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 0, 1], dist=1.0)))
@@ -52,30 +66,45 @@ def make_fluid(shape, threads, walls=None):
     return system, fluid
 
 
-def mlups(fluid, seconds):
+def calibrate(fluid, seconds):
+    """Updates per timing (about seconds / 3), and the first timing."""
     core = fluid._core
     core.step(2)  # warm-up: page faults, caches
-    n_fluid = core.n_fluid_nodes
     steps = 1
     while True:
         t0 = time.perf_counter()
         core.step(steps)
         dt = time.perf_counter() - t0
         if dt > seconds / 3 or steps > 10000:
-            break
+            return steps, dt / steps
         steps *= 2
-    best = dt / steps
-    for _ in range(2):
-        t0 = time.perf_counter()
-        core.step(steps)
-        best = min(best, (time.perf_counter() - t0) / steps)
-    return n_fluid / best / 1e6, best, n_fluid
+
+
+def timed(fluid, steps):
+    t0 = time.perf_counter()
+    fluid._core.step(steps)
+    return (time.perf_counter() - t0) / steps
+
+
+def interleaved(fluids, seconds, repeats):
+    """Best seconds per update of each fluid, timed in turns (one timing of
+    each per round, repeats rounds)."""
+    plan = {p: calibrate(f, seconds) for p, f in fluids.items()}
+    best = {p: first for p, (_, first) in plan.items()}
+    for _ in range(repeats):
+        for p, f in fluids.items():
+            best[p] = min(best[p], timed(f, plan[p][0]))
+    return best
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--sizes", type=int, nargs="+", default=[32, 64, 128, 192])
+    ap.add_argument("--precision", nargs="+", choices=("double", "single"),
+                    default=["double", "single"])
+    ap.add_argument("--repeats", type=int, default=10, help="interleaved timing rounds")
+    ap.add_argument("--periodic-only", action="store_true", help="skip the walled channels")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--csv", default="lb_mlups.csv")
     args = ap.parse_args()
@@ -86,25 +115,39 @@ def main():
     rows = []
     for threads in args.threads:
         bw = _lbmd.copy_bandwidth(1 << 25, 10, threads)
-        roof = bw / BYTES_PER_NODE / 1e6
+        roof = {p: bw / bytes_per_node(p) / 1e6 for p in args.precision}
         print(f"\n{threads} thread(s): copy bandwidth {bw / 1e9:.2f} GB/s -> roofline "
-              f"{roof:.1f} MLUPS at {BYTES_PER_NODE} bytes/node")
-        print(f"{'scene':<34} {'fluid nodes':>12} {'ms/update':>10} {'MLUPS':>8} {'roofline':>9}")
+              + ", ".join(f"{roof[p]:.1f} MLUPS in {p} ({bytes_per_node(p)} bytes/node)"
+                          for p in args.precision))
+        print(f"{'scene':<34} {'precision':>9} {'fluid nodes':>12} {'ms/update':>10} {'MLUPS':>8} "
+              f"{'roofline':>9}")
         scenes = [(f"periodic {n}^3", (n, n, n), None) for n in args.sizes]
-        scenes.append(("channel 256x64x64, 2 walls", (256, 64, 64), (1.0, 1.0)))
-        scenes.append(("channel 100x40x20, walls normal to z", (100, 40, 20), "z"))
-        scenes.append(("channel 128^3, 40 % solid", (128, 128, 128), (26.0, 25.0)))
+        if not args.periodic_only:
+            scenes.append(("channel 256x64x64, 2 walls", (256, 64, 64), (1.0, 1.0)))
+            scenes.append(("channel 100x40x20, walls normal to z", (100, 40, 20), "z"))
+            scenes.append(("channel 128^3, 40 % solid", (128, 128, 128), (26.0, 25.0)))
         for name, shape, walls in scenes:
-            system, fluid = make_fluid(shape, threads, walls)
-            m, sec, n_fluid = mlups(fluid, args.seconds)
+            built = {p: make_fluid(shape, threads, walls, p) for p in args.precision}
+            fluids = {p: fluid for p, (_, fluid) in built.items()}
+            best = interleaved(fluids, args.seconds, args.repeats)
             total = int(np.prod(shape))
-            extra = f" ({100 * (1 - n_fluid / total):.0f} % solid, {sec / total * 1e9:.2f} ns per box node)" \
-                if walls else f" ({sec / total * 1e9:.2f} ns per box node)"
-            print(f"{name:<34} {n_fluid:>12d} {sec * 1e3:>10.2f} {m:>8.1f} {m / roof:>8.0%}{extra}")
-            rows.append(dict(threads=threads, scene=name, fluid_nodes=n_fluid, ms_per_update=sec * 1e3,
-                             mlups=m, copy_GBs=bw / 1e9, roofline_mlups=roof, fraction=m / roof))
-            system.actors.clear()
-            del fluid, system
+            speed = {}
+            for p in args.precision:
+                n_fluid = fluids[p]._core.n_fluid_nodes
+                sec = best[p]
+                m = speed[p] = n_fluid / sec / 1e6
+                extra = f" ({100 * (1 - n_fluid / total):.0f} % solid, {sec / total * 1e9:.2f} ns per box node)" \
+                    if walls else f" ({sec / total * 1e9:.2f} ns per box node)"
+                print(f"{name:<34} {p:>9} {n_fluid:>12d} {sec * 1e3:>10.2f} {m:>8.1f} {m / roof[p]:>8.0%}"
+                      f"{extra}")
+                rows.append(dict(threads=threads, scene=name, precision=p, fluid_nodes=n_fluid,
+                                 ms_per_update=sec * 1e3, mlups=m, copy_GBs=bw / 1e9,
+                                 roofline_mlups=roof[p], fraction=m / roof[p]))
+            if "double" in speed and "single" in speed:
+                print(f"{'':<34} single / double = {speed['single'] / speed['double']:.2f}x")
+            for system, _ in built.values():
+                system.actors.clear()
+            del fluids, built
     write_rows(args.csv, rows)
 
 

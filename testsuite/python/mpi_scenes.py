@@ -100,11 +100,12 @@ def scene_fluid(node_grid, thermal=False):
     return dict(system=system, lbf=lbf, cells=[], force=force)
 
 
-def scene_boundaries(node_grid):
+def scene_boundaries(node_grid, single_precision=False):
     box = (12.0, 26.0, 10.0)
     system = new_system(box, node_grid)
     force = np.array([0.0, 2e-3, 0.0])
-    lbf = lb.LBFluid(agrid=AGRID, dens=DENS, visc=VISC, tau=TAU, ext_force_density=force)
+    lbf = lb.LBFluid(agrid=AGRID, dens=DENS, visc=VISC, tau=TAU, ext_force_density=force,
+                     single_precision=single_precision)
     system.actors.add(lbf)
     walls = [(shapes.Wall(normal=[0, 0, 1], dist=1.0), [0.0, 0.0, 0.0]),
              (shapes.Wall(normal=[0, 0, -1], dist=-9.0), [0.05, 0.0, 0.0]),   # moving along x
@@ -191,6 +192,7 @@ def run_bifurcation(steps, node_grid):
 SCENES = {"fluid": lambda grid: scene_fluid(grid),
           "fluid_thermal": lambda grid: scene_fluid(grid, thermal=True),
           "boundaries": scene_boundaries,
+          "boundaries_single": lambda grid: scene_boundaries(grid, single_precision=True),
           "cells": scene_cells,
           "cells_thermal": scene_cells_thermal,
           "crossing": scene_crossing}

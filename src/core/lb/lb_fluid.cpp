@@ -25,13 +25,14 @@ void require(bool ok, const std::string& msg) {
     throw InputError(msg);
 }
 
-double* allocate(std::size_t n) {
-  const std::size_t bytes = ((n * sizeof(double) + 63) / 64) * 64;
+/** n zeroed values of `size` bytes each, 64-byte aligned. */
+void* allocate(std::size_t n, std::size_t size) {
+  const std::size_t bytes = ((n * size + 63) / 64) * 64;
   void* p = std::aligned_alloc(64, bytes);
   if (!p)
     throw std::bad_alloc();
   std::memset(p, 0, bytes);
-  return static_cast<double*>(p);
+  return p;
 }
 
 /** lambda = 1 - omega, with omega checked to lie in (0, 2). */
@@ -85,7 +86,8 @@ LBFluid::LBFluid(const LBParams& p, const BoxGeometry& box, MPI_Comm comm, const
     // 19 populations + flags per padded node: refused (instead of an
     // allocation whose size wrapped around) when it exceeds 2^50 bytes
     const double padded = double(m_global[0] + 2) * (m_global[1] + 2) * (m_global[2] + 2);
-    require(padded * (Q * sizeof(double) + 2) < std::ldexp(1.0, 50),
+    const double bytes = p.single_precision ? sizeof(float) : sizeof(double);
+    require(padded * (Q * bytes + 2) < std::ldexp(1.0, 50),
             "the lattice of " + format_number(double(m_global[0]) * m_global[1] * m_global[2]) +
                 " nodes (box / agrid) needs more than 2^50 bytes; use a larger agrid");
   }
@@ -196,7 +198,7 @@ void LBFluid::allocate_subdomain() {
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
   m_stride = ((nodes + 7) / 8) * 8;
   std::free(m_f);
-  m_f = allocate(Q * m_stride);
+  m_f = allocate(Q * m_stride, population_bytes());
   for (int q = 0; q < Q; ++q) {
     m_read_normal[q] = static_cast<std::ptrdiff_t>(q * m_stride);
     m_read_swapped[q] = static_cast<std::ptrdiff_t>(opposite(q) * m_stride) - m_offset[q];
@@ -211,7 +213,7 @@ void LBFluid::allocate_subdomain() {
     for (int y = 1; y <= m_n[1]; ++y)
       for (int z = 1; z <= m_n[2]; ++z)
         for (int q = 0; q < Q; ++q)
-          m_f[q * m_stride + index(x, y, z)] = w[q] * m_p.density;
+          set_population_at(q * m_stride + index(x, y, z), w[q] * m_p.density);
 }
 
 std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& boundaries) const {
@@ -239,7 +241,9 @@ std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& b
 void LBFluid::repartition(const DomainGrid& old_grid) {
   // Every rank sends the nodes of its old subdomain that lie in another
   // rank's new one (all 19 populations, normal layout, x fastest over the
-  // overlap box); the boxes are known to all, so are the counts.
+  // overlap box); the boxes are known to all, so are the counts. They travel
+  // as double in either precision (a float goes through double unchanged):
+  // a rare step, run when the boundaries are set.
   normalize_layout();
   const int size = m_grid.size();
   auto overlap = [](const Vec3i& lo_a, const Vec3i& n_a, const Vec3i& lo_b, const Vec3i& n_b,
@@ -268,7 +272,7 @@ void LBFluid::repartition(const DomainGrid& old_grid) {
           for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
             const std::size_t i = old_index(Vec3i(x, y, z));
             for (int q = 0; q < Q; ++q)
-              send.push_back(m_f[q * m_stride + i]);
+              send.push_back(population_at(q * m_stride + i));
           }
     send_counts[r] = static_cast<int>(send.size()) - send_displs[r];
   }
@@ -296,7 +300,7 @@ void LBFluid::repartition(const DomainGrid& old_grid) {
         for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
           const std::size_t i = domain_index(Vec3i(x, y, z));
           for (int q = 0; q < Q; ++q)
-            m_f[q * m_stride + i] = recv[k++];
+            set_population_at(q * m_stride + i, recv[k++]);
         }
   }
 }
@@ -329,14 +333,14 @@ void LBFluid::normalize_layout() {
   for (const Run& r : m_runs)
     for (int i = 0; i < r.length; ++i, ++k)
       for (int q = 0; q < Q; ++q)
-        gathered[Q * k + q] = m_f[population_slot(q, r.start + i)];
+        gathered[Q * k + q] = population_at(population_slot(q, r.start + i));
   m_swapped = false;
-  std::fill(m_f, m_f + Q * m_stride, 0.0);
+  std::memset(m_f, 0, Q * m_stride * population_bytes()); // 0.0 in either type
   k = 0;
   for (const Run& r : m_runs)
     for (int i = 0; i < r.length; ++i, ++k)
       for (int q = 0; q < Q; ++q)
-        m_f[population_slot(q, r.start + i)] = gathered[Q * k + q];
+        set_population_at(population_slot(q, r.start + i), gathered[Q * k + q]);
 }
 
 void LBFluid::set_n_threads(int n) {
@@ -435,10 +439,10 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
         const std::size_t n = index(x, y, z);
         if (old_flag[n] != 0 && m_flag[n] == 0)
           for (int q = 0; q < Q; ++q)
-            m_f[q * m_stride + n] = w[q] * m_p.density;
+            set_population_at(q * m_stride + n, w[q] * m_p.density);
         if (m_flag[n] != 0)
           for (int q = 0; q < Q; ++q)
-            m_f[q * m_stride + n] = 0.0;
+            set_population_at(q * m_stride + n, 0.0);
         // Coupling impulses waiting for the next update (a run that stopped
         // between updates, tau > time_step) stay with the nodes that remain
         // fluid; on a node turned solid they are dropped (the wall takes
@@ -500,10 +504,18 @@ std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) 
             [](const PlaceRun& a, const PlaceRun& b) { return a.first < b.first; });
   std::vector<PlaceRun> runs;
   for (const PlaceRun& p : pairs) {
-    if (!runs.empty()) {
+    if (!runs.empty() && p.term == runs.back().term) {
       PlaceRun& last = runs.back();
-      if (p.first == last.first + last.length && p.second == last.second + last.length &&
-          p.term == last.term) {
+      // a second pair sets the step (the next place in memory order
+      // first: contiguous wherever a row continues), the others follow it
+      if (last.length == 1 && p.first > last.first && p.second > last.second &&
+          p.first - last.first == p.second - last.second) {
+        last.step = p.first - last.first;
+        ++last.length;
+        continue;
+      }
+      if (last.length > 1 && p.first == last.first + last.length * last.step &&
+          p.second == last.second + last.length * last.step) {
         ++last.length;
         continue;
       }
@@ -523,7 +535,7 @@ Vec3 LBFluid::boundary_force(int b) const {
   for (const Link& l : m_links) {
     if (l.boundary != b)
       continue;
-    const double back = m_f[population_slot(opposite(l.q), l.node)];
+    const double back = population_at(population_slot(opposite(l.q), l.node));
     const double transfer = 2.0 * back + l.wall_term;
     for (int d = 0; d < 3; ++d)
       sum[d] += c[l.q][d] * transfer;
@@ -649,7 +661,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // on every rank (it decides collective recomputations)
         if (prop == "population") {
           for (int q = 0; q < Q; ++q)
-            m_f[population_slot(q, own)] = v[q];
+            set_population_at(population_slot(q, own), v[q]);
           continue;
         }
         const double rho = prop == "density" ? v[0] : node_density(node);
@@ -657,7 +669,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
         const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
         for (int q = 0; q < Q; ++q)
-          m_f[population_slot(q, own)] = equilibrium(q, rho, u_lattice);
+          set_population_at(population_slot(q, own), equilibrium(q, rho, u_lattice));
       }
 }
 
@@ -691,7 +703,7 @@ Populations LBFluid::node_populations(const Vec3i& node) const {
     return f;
   }
   for (int q = 0; q < Q; ++q)
-    f[q] = m_f[population_slot(q, n)];
+    f[q] = population_at(population_slot(q, n));
   return f;
 }
 
@@ -713,7 +725,7 @@ void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
     require(std::isfinite(f[q]), "population: values must be finite");
   ++m_state_version; // after the checks: a refused call changes nothing
   for (int q = 0; q < Q; ++q)
-    m_f[population_slot(q, n)] = f[q];
+    set_population_at(population_slot(q, n), f[q]);
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
@@ -725,7 +737,7 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
   const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
   ++m_state_version;
   for (int q = 0; q < Q; ++q)
-    m_f[population_slot(q, n)] = equilibrium(q, rho, u_lattice);
+    set_population_at(population_slot(q, n), equilibrium(q, rho, u_lattice));
 }
 
 void LBFluid::open_impulse_field() {
@@ -747,24 +759,28 @@ void LBFluid::compute_coupling_velocities() {
   m_ledger.node_coupling.resize(count);
   auto* out = m_ledger.node_coupling.data();
   const std::uint32_t* entry = m_ledger.compact.data();
-  for (std::size_t i = 0; i < count; ++i) {
-    if (i + ahead < count) {
-      const double* f = m_f + nodes[i + ahead];
-      for (int q = 0; q < Q; ++q)
-        __builtin_prefetch(f + off[q], 0, 1);
+  with_populations([&](const auto* populations) {
+    for (std::size_t i = 0; i < count; ++i) {
+      if (i + ahead < count) {
+        const auto* f = populations + nodes[i + ahead];
+        for (int q = 0; q < Q; ++q)
+          __builtin_prefetch(f + off[q], 0, 1);
+      }
+      out[entry[nodes[i]]] = {coupling_velocity(nodes[i]), Vec3::Zero()};
     }
-    out[entry[nodes[i]]] = {coupling_velocity(nodes[i]), Vec3::Zero()};
-  }
+  });
 }
 
 double LBFluid::total_mass() const {
-  double mass = 0.0;
-  for (const Run& r : m_runs)
-    for (int q = 0; q < Q; ++q) {
-      const double* f = m_f + population_slot(q, r.start);
-      for (int i = 0; i < r.length; ++i)
-        mass += f[i];
-    }
+  double mass = 0.0; // summed in double in either precision
+  with_populations([&](const auto* populations) {
+    for (const Run& r : m_runs)
+      for (int q = 0; q < Q; ++q) {
+        const auto* f = populations + population_slot(q, r.start);
+        for (int i = 0; i < r.length; ++i)
+          mass += f[i];
+      }
+  });
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, &mass, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());
   return mass * std::pow(m_p.agrid, 3);
@@ -772,21 +788,23 @@ double LBFluid::total_mass() const {
 
 Vec3 LBFluid::total_momentum() const {
   Vec3 j = Vec3::Zero();
-  for (const Run& r : m_runs) {
-    for (int q = 1; q < Q; ++q) {
-      const double* f = m_f + population_slot(q, r.start);
-      double s = 0.0;
-      for (int i = 0; i < r.length; ++i)
-        s += f[i];
-      for (int d = 0; d < 3; ++d)
-        j[d] += c[q][d] * s;
+  with_populations([&](const auto* populations) {
+    for (const Run& r : m_runs) {
+      for (int q = 1; q < Q; ++q) {
+        const auto* f = populations + population_slot(q, r.start);
+        double s = 0.0;
+        for (int i = 0; i < r.length; ++i)
+          s += f[i];
+        for (int d = 0; d < 3; ++d)
+          j[d] += c[q][d] * s;
+      }
+      if (m_field_used)
+        for (int i = 0; i < r.length; ++i)
+          if (field_valid(r.start + i))
+            for (int d = 0; d < 3; ++d)
+              j[d] += m_field[3 * (r.start + i) + d];
     }
-    if (m_field_used)
-      for (int i = 0; i < r.length; ++i)
-        if (field_valid(r.start + i))
-          for (int d = 0; d < 3; ++d)
-            j[d] += m_field[3 * (r.start + i) + d];
-  }
+  });
   Vec3 in_flight = m_ledger.in_flight;
   if (m_grid.size() > 1) {
     MPI_Allreduce(MPI_IN_PLACE, j.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());

@@ -34,6 +34,12 @@
 // is bit for bit the serial one. Node (i, j, k) below is always the global
 // lattice node; padded indices are this rank's.
 //
+// Precision: the populations are stored as double, or as float when
+// single_precision (LBParams). Every function that touches them is a
+// template on the stored type (Real), chosen once per call, outside the
+// node loops; the collision loads float, computes in double and rounds the
+// result to float once per population and update.
+//
 // Units: populations are mass densities (the unit of `dens`); velocities in
 // the kernel are lattice velocities u * tau / agrid, force densities are
 // momentum-density changes per update in those units, F * tau^2 / agrid.
@@ -74,6 +80,9 @@ struct LBParams {
   std::uint64_t seed = 0;
   Collision collision = Collision::mrt;
   int n_threads = 0; ///< 0: OMP_NUM_THREADS if set, else 1
+  /// populations stored as float (the collision still computes in double):
+  /// half the memory and half the traffic of the memory-bound update
+  bool single_precision = false;
 };
 
 /** A boundary: nodes whose centre lies in the shape (dist <= 0) are solid,
@@ -107,6 +116,8 @@ public:
   double agrid() const { return m_p.agrid; }
   double tau() const { return m_p.tau; }
   const LBParams& params() const { return m_p; }
+  /** Populations stored as float (true) or double. */
+  bool single_precision() const { return m_p.single_precision; }
   const Relaxation& relaxation() const { return m_relax; }
   /** The global lattice (nodes per axis). */
   const Vec3i& grid() const { return m_global; }
@@ -383,8 +394,8 @@ private:
   std::size_t domain_index(const Vec3i& g) const;
   /** Sends/receives the remote part of a halo step (fill_ghosts: faces to
    *  the neighbours' ghosts, else ghosts folded into the neighbours' faces). */
-  void exchange_remote(double* f, bool fill_ghosts) const;
-  void apply_bounce_back(double* f) const;
+  template <typename Real> void exchange_remote(Real* f, bool fill_ghosts) const;
+  template <typename Real> void apply_bounce_back(Real* f) const;
   /** Where an update found a node out of the model's range. */
   struct BadNode {
     std::size_t node = 0;
@@ -404,13 +415,39 @@ private:
   void normalize_layout();
   /** fill_ghosts: copy the domain into the ghost layer (after an even update);
    *  else fold the ghost layer into the domain (after an odd update). */
-  void halo_exchange(double* f, bool fill_ghosts) const;
-  template <bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
-  bool update_run(const Run& r, double* f, BadNode& bad);
+  template <typename Real> void halo_exchange(Real* f, bool fill_ghosts) const;
+  template <typename Real, bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
+  bool update_run(const Run& r, Real* f, BadNode& bad);
+  /** step() on the populations stored as Real. */
+  template <typename Real> void step_stored_as(Real* f);
+  /** body(f) with f the populations as double* or float* (their stored
+   *  type): the one branch on the precision, outside the caller's loops. */
+  template <class Body> decltype(auto) with_populations(Body&& body) const {
+    if (m_p.single_precision)
+      return body(static_cast<float*>(m_f));
+    return body(static_cast<double*>(m_f));
+  }
+  /** The population at offset `slot` of the array (any precision). */
+  double population_at(std::size_t slot) const {
+    return m_p.single_precision ? double(static_cast<const float*>(m_f)[slot])
+                                : static_cast<const double*>(m_f)[slot];
+  }
+  /** Stores v at offset `slot` (rounded to float in single precision). */
+  void set_population_at(std::size_t slot, double v) {
+    if (m_p.single_precision)
+      static_cast<float*>(m_f)[slot] = static_cast<float>(v);
+    else
+      static_cast<double*>(m_f)[slot] = v;
+  }
+  std::size_t population_bytes() const {
+    return m_p.single_precision ? sizeof(float) : sizeof(double);
+  }
   /** Throws SimulationInstability for the bad node; step() refuses to run
    *  after it (m_failed_update). */
   [[noreturn]] void report_instability(const BadNode& bad);
   inline void moments(std::size_t n, double& rho, Vec3& j) const;
+  template <typename Real>
+  inline void moments_of(const Real* populations, std::size_t n, double& rho, Vec3& j) const;
 
   LBParams m_p;
   Relaxation m_relax{};
@@ -420,7 +457,9 @@ private:
   Vec3i m_global, m_origin; ///< global lattice, this rank's first node
   Vec3i m_n, m_pad;         ///< this rank's extent, + 2 ghost layers
   std::size_t m_stride = 0;
-  double* m_f = nullptr;  ///< populations, 19 * stride, updated in place
+  /// populations, 19 * stride, updated in place: double, or float when
+  /// single_precision (access through with_populations / population_at)
+  void* m_f = nullptr;
   bool m_swapped = false; ///< after an odd number of updates (see top)
   /// force density of the particle coupling, 3 components per node
   /// (node-major: one cache line per deposit; the kernel reads it per block).
@@ -447,21 +486,25 @@ private:
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
   /// Pairs of places in m_f that a fix-up after the update copies between
-  /// (with a term subtracted), as runs: `length` consecutive places from
+  /// (with a term subtracted), as runs: `length` places `step` apart from
   /// `first` and from `second`. Walls and periodic faces give runs of whole
-  /// rows along x, so the fix-ups are vectorised copies instead of a list of
-  /// scattered single places (their order does not matter: no place is
-  /// written twice, none read after another pair wrote it).
+  /// rows along x (step 1), so the fix-ups are vectorised copies instead of
+  /// a list of scattered single places; the faces normal to x give columns
+  /// along y (step: a row), one descriptor each instead of one per place
+  /// (their order does not matter: no place is written twice, none read
+  /// after another pair wrote it).
   struct PlaceRun {
     std::size_t first, second;
     std::size_t length;
     double term;
+    std::size_t step = 1;
   };
   /** Single pairs (length 1) merged into runs; sorts them by `first`. */
   static std::vector<PlaceRun> merge_runs(std::vector<PlaceRun> pairs);
   /** f[to] = f[from] - term for every pair of the runs, into `first`
    *  (into_first) or into `second`. */
-  static void apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first);
+  template <typename Real>
+  static void apply_runs(Real* f, const std::vector<PlaceRun>& runs, bool into_first);
   /// the links as the update uses them: first = slot q of the solid node,
   /// second = slot -q of the fluid node, term = the wall term
   std::vector<PlaceRun> m_bounce_back;
@@ -478,6 +521,8 @@ private:
     std::vector<std::size_t> ghost, face;
     std::vector<std::size_t> velocity_ghost, velocity_face; ///< nodes (coupling)
     mutable std::vector<double> send, recv;
+    /// the population halo in single precision (MPI_FLOAT: half the bytes)
+    mutable std::vector<float> send_single, recv_single;
   };
   std::vector<HaloPeer> m_peers;
   std::vector<Vec3> m_ghost_velocity;
@@ -502,10 +547,16 @@ private:
 // Inline: the coupling's velocity pass calls these once per lattice node it
 // needs, so the 19 sums belong in its loop.
 inline void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
+  with_populations([&](const auto* f) { moments_of(f, n, rho, j); });
+}
+
+template <typename Real>
+inline void LBFluid::moments_of(const Real* populations, std::size_t n, double& rho,
+                                Vec3& j) const {
   // the 19 loads with the layout's offsets, the velocity components known at
   // compile time after unrolling, so the zero ones drop out
   const std::ptrdiff_t* off = read_offset();
-  const double* f = m_f + n;
+  const Real* f = populations + n;
   double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
 #pragma GCC unroll 19
   for (int q = 0; q < d3q19::Q; ++q) {

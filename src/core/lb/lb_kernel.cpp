@@ -184,8 +184,8 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
 
 } // namespace
 
-template <bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
-bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
+template <typename Real, bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
+bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
   // AA pattern (see lb_fluid.hpp): population q of node n is read at
   // f[read[q] + n] and its post-collision value written to f[write[q] + n];
   // within one update each node reads and writes the same 19 places
@@ -220,10 +220,13 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
     static_assert(block == 32, "field_valid_bits32 gives the field's marks of 32 nodes");
     // the hardware prefetcher does not keep 19 streams far enough ahead:
     // request the rows `distance` nodes ahead into L2 (in the next run when
-    // this one ends; runs are in memory order)
-    constexpr std::size_t distance = 96;
+    // this one ends; runs are in memory order), one request per cache line;
+    // 768 bytes ahead per stream in either precision
+    constexpr std::size_t distance = 96 * sizeof(double) / sizeof(Real);
+    constexpr int per_line = 64 / sizeof(Real);
     const Run* next_run = &r + 1 < m_runs.data() + m_runs.size() ? &r + 1 : nullptr;
-    alignas(64) double fout[Q][block];
+    // post-collision values, already rounded to the stored type
+    alignas(64) Real fout[Q][block];
     alignas(64) double force[3][block];
     for (std::size_t b0 = begin; b0 < end; b0 += block) {
       const int len = static_cast<int>(std::min<std::size_t>(block, end - b0));
@@ -231,7 +234,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
       if (ahead >= end)
         ahead = next_run ? next_run->start + (ahead - end) : b0;
       for (int q = 0; q < Q; ++q)
-        for (int p = 0; p < block; p += 8)
+        for (int p = 0; p < block; p += per_line)
           __builtin_prefetch(f + read[q] + static_cast<std::ptrdiff_t>(ahead + p), 1, 2);
       for (int i = 0; i < len; ++i) {
         force[0][i] = fx;
@@ -253,7 +256,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
           force[2][i] += gb[3 * i + 2];
         }
       }
-      const double* in[Q];
+      const Real* in[Q];
       for (int q = 0; q < Q; ++q)
         in[q] = f + read[q] + static_cast<std::ptrdiff_t>(b0);
       int bad = 0;
@@ -267,7 +270,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
 #pragma GCC unroll 19
         for (int q = 0; q < Q; ++q)
-          fout[q][i] = out[q];
+          fout[q][i] = static_cast<Real>(out[q]);
         bad |= out_of_range(res);
       }
       if (bad) {
@@ -283,8 +286,8 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         return record_bad(b0, force[0]); // not reached: the block had a bad node
       }
       for (int q = 0; q < Q; ++q) {
-        double* __restrict dst = f + write[q] + static_cast<std::ptrdiff_t>(b0);
-        const double* __restrict src = fout[q];
+        Real* __restrict dst = f + write[q] + static_cast<std::ptrdiff_t>(b0);
+        const Real* __restrict src = fout[q];
         for (int i = 0; i < len; ++i)
           dst[i] = src[i];
       }
@@ -321,7 +324,7 @@ bool LBFluid::update_run(const Run& r, double* f, BadNode& bad_node) {
         out[q] += w[q] * sum;
       }
       for (int q = 0; q < Q; ++q)
-        f[write[q] + static_cast<std::ptrdiff_t>(n)] = out[q];
+        f[write[q] + static_cast<std::ptrdiff_t>(n)] = static_cast<Real>(out[q]);
     }
   }
   return false;
@@ -391,7 +394,7 @@ void LBFluid::build_halo_pairs() {
     for (HaloPeer& p : m_peers)
       if (p.rank == rank)
         return p;
-    m_peers.push_back({rank, {}, {}, {}, {}, {}, {}});
+    m_peers.push_back({rank, {}, {}, {}, {}, {}, {}, {}, {}});
     return m_peers.back();
   };
   const Vec3i me = m_grid.coords();
@@ -455,10 +458,25 @@ std::size_t LBFluid::halo_bytes() const {
   std::size_t n = 0;
   for (const HaloPeer& p : m_peers)
     n += p.face.size(); // sent by a fill, as many as the ghosts folded back
-  return n * sizeof(double);
+  return n * population_bytes();
 }
 
-void LBFluid::exchange_remote(double* f, bool fill_ghosts) const {
+namespace {
+/** The halo buffer of the stored type: populations travel as they are
+ *  stored (MPI_FLOAT in single precision, half the bytes). */
+template <typename Real>
+std::vector<Real>& halo_buffer(std::vector<double>& as_double, std::vector<float>& as_float) {
+  if constexpr (std::is_same_v<Real, float>)
+    return as_float;
+  else
+    return as_double;
+}
+template <typename Real> MPI_Datatype mpi_type() {
+  return std::is_same_v<Real, float> ? MPI_FLOAT : MPI_DOUBLE;
+}
+} // namespace
+
+template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts) const {
   if (m_peers.empty())
     return;
   // fill: faces out, ghosts in; fold: ghosts out, faces in (a copy, as in
@@ -468,25 +486,28 @@ void LBFluid::exchange_remote(double* f, bool fill_ghosts) const {
   requests.reserve(2 * m_peers.size());
   for (const HaloPeer& p : m_peers) {
     const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
-    p.recv.resize(in.size());
+    std::vector<Real>& recv = halo_buffer<Real>(p.recv, p.recv_single);
+    recv.resize(in.size());
     requests.emplace_back();
-    MPI_Irecv(p.recv.data(), static_cast<int>(p.recv.size()), MPI_DOUBLE, p.rank, 71, m_grid.comm(),
-              &requests.back());
+    MPI_Irecv(recv.data(), static_cast<int>(recv.size()), mpi_type<Real>(), p.rank, 71,
+              m_grid.comm(), &requests.back());
   }
   for (const HaloPeer& p : m_peers) {
     const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
-    p.send.resize(out.size());
+    std::vector<Real>& send = halo_buffer<Real>(p.send, p.send_single);
+    send.resize(out.size());
     for (std::size_t i = 0; i < out.size(); ++i)
-      p.send[i] = f[out[i]];
+      send[i] = f[out[i]];
     requests.emplace_back();
-    MPI_Isend(p.send.data(), static_cast<int>(p.send.size()), MPI_DOUBLE, p.rank, 71, m_grid.comm(),
-              &requests.back());
+    MPI_Isend(send.data(), static_cast<int>(send.size()), mpi_type<Real>(), p.rank, 71,
+              m_grid.comm(), &requests.back());
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (const HaloPeer& p : m_peers) {
     const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
+    const std::vector<Real>& recv = halo_buffer<Real>(p.recv, p.recv_single);
     for (std::size_t i = 0; i < in.size(); ++i)
-      f[in[i]] = p.recv[i];
+      f[in[i]] = recv[i];
   }
 }
 
@@ -523,18 +544,35 @@ void LBFluid::refresh_ghost_velocities() {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void LBFluid::apply_runs(double* f, const std::vector<PlaceRun>& runs, bool into_first) {
+template <typename Real>
+void LBFluid::apply_runs(Real* f, const std::vector<PlaceRun>& runs, bool into_first) {
   for (const PlaceRun& r : runs) {
     // the two sides of a run are disjoint places (ghosts and domain nodes;
     // slots q and -q)
-    double* __restrict to = f + (into_first ? r.first : r.second);
-    const double* __restrict from = f + (into_first ? r.second : r.first);
-    for (std::size_t i = 0; i < r.length; ++i)
-      to[i] = from[i] - r.term; // term 0 in the halo: x - 0.0 is x
+    Real* __restrict to = f + (into_first ? r.first : r.second);
+    const Real* __restrict from = f + (into_first ? r.second : r.first);
+    // in double, rounded to Real once; term 0 in the halo: x - 0.0 is x,
+    // a float too (through double and back)
+    if (r.step == 1) {
+      for (std::size_t i = 0; i < r.length; ++i)
+        to[i] = static_cast<Real>(from[i] - r.term);
+    } else {
+      // a cache line per place: the lines `ahead` places on are requested
+      // (the hardware prefetchers do not follow a stride of a lattice row)
+      constexpr std::size_t ahead = 8;
+      const std::size_t step = r.step;
+      for (std::size_t i = 0; i < r.length; ++i) {
+        if (i + ahead < r.length) {
+          __builtin_prefetch(from + (i + ahead) * step, 0, 3);
+          __builtin_prefetch(to + (i + ahead) * step, 1, 3);
+        }
+        to[i * step] = static_cast<Real>(from[i * step] - r.term);
+      }
+    }
   }
 }
 
-void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
+template <typename Real> void LBFluid::halo_exchange(Real* f, bool fill_ghosts) const {
   apply_runs(f, m_halo, fill_ghosts);
   if (m_peers.empty())
     return;
@@ -543,7 +581,7 @@ void LBFluid::halo_exchange(double* f, bool fill_ghosts) const {
   m_halo_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void LBFluid::apply_bounce_back(double* f) const {
+template <typename Real> void LBFluid::apply_bounce_back(Real* f) const {
   // Halfway bounce-back (Ladd 1994): f_q* that a fluid node sent towards its
   // solid neighbour comes back as f_{-q}, less the moving-wall term
   // 6 w_q rho0 c_q . u_wall. After an odd update f_q* was pushed into the
@@ -586,6 +624,10 @@ void LBFluid::check_usable() const {
 void LBFluid::step() {
   check_usable();
   ++m_state_version;
+  with_populations([this](auto* f) { step_stored_as(f); });
+}
+
+template <typename Real> void LBFluid::step_stored_as(Real* f) {
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0;
@@ -593,28 +635,27 @@ void LBFluid::step() {
   const long n_runs = static_cast<long>(m_runs.size());
   long first_bad = n_runs;
   BadNode bad_node;
-  double* f = m_f;
   // one instantiation per combination, chosen outside the node loops
   auto update = [&](const Run& r, BadNode& b) {
     if (thermal) {
       if (even)
-        return field ? update_run<true, true, false, true>(r, f, b)
-                     : update_run<true, false, false, true>(r, f, b);
-      return field ? update_run<true, true, false, false>(r, f, b)
-                   : update_run<true, false, false, false>(r, f, b);
+        return field ? update_run<Real, true, true, false, true>(r, f, b)
+                     : update_run<Real, true, false, false, true>(r, f, b);
+      return field ? update_run<Real, true, true, false, false>(r, f, b)
+                   : update_run<Real, true, false, false, false>(r, f, b);
     }
     if (relaxed) {
       if (even)
-        return field ? update_run<false, true, true, true>(r, f, b)
-                     : update_run<false, false, true, true>(r, f, b);
-      return field ? update_run<false, true, true, false>(r, f, b)
-                   : update_run<false, false, true, false>(r, f, b);
+        return field ? update_run<Real, false, true, true, true>(r, f, b)
+                     : update_run<Real, false, false, true, true>(r, f, b);
+      return field ? update_run<Real, false, true, true, false>(r, f, b)
+                   : update_run<Real, false, false, true, false>(r, f, b);
     }
     if (even)
-      return field ? update_run<false, true, false, true>(r, f, b)
-                   : update_run<false, false, false, true>(r, f, b);
-    return field ? update_run<false, true, false, false>(r, f, b)
-                 : update_run<false, false, false, false>(r, f, b);
+      return field ? update_run<Real, false, true, false, true>(r, f, b)
+                   : update_run<Real, false, false, false, true>(r, f, b);
+    return field ? update_run<Real, false, true, false, false>(r, f, b)
+                 : update_run<Real, false, false, false, false>(r, f, b);
   };
 #ifdef PYOIF_WITH_OPENMP
 #pragma omp parallel for schedule(static) num_threads(m_threads)

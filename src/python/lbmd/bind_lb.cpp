@@ -61,7 +61,7 @@ void bind_lb(py::module_& m) {
       .def(py::init([](double agrid, double tau, double dens, double visc, double bulk_visc,
                        const Vec3& ext_force_density, double kT, std::uint64_t seed,
                        const std::string& collision, int n_threads, const Vec3& box_l,
-                       const Vec3i& node_grid, bool balance) {
+                       const Vec3i& node_grid, bool balance, bool single_precision) {
              lb::LBParams p;
              p.agrid = agrid;
              p.tau = tau;
@@ -73,6 +73,7 @@ void bind_lb(py::module_& m) {
              p.seed = seed;
              p.collision = collision_of(collision);
              p.n_threads = n_threads;
+             p.single_precision = single_precision;
              // every rank of the run takes part: the lattice is split over them
              return std::make_shared<LBFluid>(p, BoxGeometry(box_l, {true, true, true}),
                                               MPI_COMM_WORLD, node_grid, balance);
@@ -80,7 +81,7 @@ void bind_lb(py::module_& m) {
            py::arg("agrid"), py::arg("tau"), py::arg("dens"), py::arg("visc"), py::arg("bulk_visc"),
            py::arg("ext_force_density"), py::arg("kT"), py::arg("seed"), py::arg("collision"),
            py::arg("n_threads"), py::arg("box_l"), py::arg("node_grid") = Vec3i::Zero(),
-           py::arg("balance") = true)
+           py::arg("balance") = true, py::arg("single_precision") = false)
       .def_property_readonly("node_grid", [](const LBFluid& f) { return f.domain().dims(); })
       .def_property_readonly("decomposition",
                              [](const LBFluid& f) { return f.domain().describe(); })
@@ -91,6 +92,7 @@ void bind_lb(py::module_& m) {
       .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
       .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
       .def_property_readonly("agrid", &LBFluid::agrid)
+      .def_property_readonly("single_precision", &LBFluid::single_precision)
       .def_property_readonly("tau", &LBFluid::tau)
       .def_property_readonly("n_updates", &LBFluid::n_updates)
       .def_property_readonly("n_fluid_nodes", &LBFluid::n_fluid_nodes)

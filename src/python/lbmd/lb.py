@@ -1,7 +1,7 @@
 """Lattice-Boltzmann D3Q19 fluid (ESPResSo 4.2 ``espressomd.lb`` names).
 
 ``LBFluid(agrid=, dens=, visc=, tau=, bulk_visc=None, ext_force_density=[0, 0, 0],
-kT=0, seed=None, collision="MRT", n_threads=0)`` is an actor: add it with
+kT=0, seed=None, collision="MRT", n_threads=0, single_precision=False)`` is an actor: add it with
 ``system.actors.add(lbf)``. Units are the MD units: agrid a length, tau the
 lattice time step (an integer multiple of ``system.time_step``), dens mass per
 volume, visc and bulk_visc kinematic viscosities (length^2 / time),
@@ -52,7 +52,9 @@ class LBFluid(ParameterObject):
                Param("seed", "seed", None, check=non_negative, doc="RNG seed (required if kT > 0)"),
                Param("collision", "object", "MRT", cls=str,
                      check=(lambda s: s.upper() in _COLLISIONS, "one of 'MRT', 'MRT_ESPRESSO', 'TRT', 'BGK'")),
-               _threads_param()]
+               _threads_param(),
+               Param("single_precision", "bool", False,
+                     doc="store the populations as float (half the memory traffic)")]
 
     def _validate(self):
         if self.kT > 0 and self.seed is None:
@@ -80,7 +82,8 @@ class LBFluid(ParameterObject):
                              kT=self.kT, seed=self.seed, collision=self.collision,
                              n_threads=self.n_threads, box_l=system.box_l,
                              node_grid=system.cell_system._node_grid or [0, 0, 0],
-                             balance=system.cell_system.balance == "fluid")
+                             balance=system.cell_system.balance == "fluid",
+                             single_precision=self.single_precision)
         system.lbboundaries._apply(core)
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)

@@ -1,0 +1,210 @@
+"""Populations stored as float: LBFluid(single_precision=True).
+
+The collision computes in double; each population is rounded to float
+(relative 6e-8) once per update, so the error is that round-off, carried
+along by the flow until viscosity damps it. Measured (this file's scenes):
+
+- Poiseuille between bounce-back walls (the helper of test_lb_poiseuille.py),
+  default MRT, H = 20 nodes, peak speed 0.02 lattice units: max relative
+  error 4.1e-5 at nu = 1/6 and 5.0e-6 at nu = 1 (double: 2.8e-8 and
+  7.7e-6; the round-off acts for a viscous time H^2 / nu, so it grows as
+  1 / nu); magic TRT, 12 nodes, exact in double (1e-13): 2.3e-5. Bound
+  2e-4: a lost or mis-rounded population per update would exceed it.
+- Mass: a nonuniform periodic fluid with a body force, 1000 updates: the
+  total mass drifts by 2.4e-7 relative (bound 1e-6; double 6e-14); a
+  random walk of the per-node rounding, 1.5e-6 after 20000 updates.
+- The same scene in float and in double, 400 updates: the velocities
+  differ by 8.3e-6 of the peak speed (required: between 1e-9 and 1e-4), and
+  every population read back is a float (the double run's are not): the
+  storage really is float.
+- Thermal fluctuations: kT from the node velocities within 2 % (as
+  test_lb_thermal.py; measured -0.4 %), total momentum zero to float
+  round-off (1e-4 of mass sqrt(kT), measured 5e-6).
+- Particle coupling: particle + fluid momentum conserved to 2e-5 relative
+  over 60 steps (measured 1.2e-6: the populations' rounding; double:
+  1e-12), and the fluid takes it.
+- Couette flow with a moving wall: linear profile to 1e-4 of the wall
+  speed (measured 5.9e-6), wall force to 1e-3 (measured 1.8e-5).
+- Node access, VTK output, instability detection work as in double.
+The MPI decomposition in float (halo as MPI_FLOAT) is bit for bit the
+serial run: scene "boundaries_single" of test_mpi_equality.py.
+"""
+import os
+import tempfile
+import unittest
+
+import numpy as np
+
+import lbmd
+import lbmd.lb
+import lbmd.lbboundaries
+import lbmd.shapes
+from test_lb_poiseuille import poiseuille
+
+
+def periodic_fluid(single_precision, box=(10.0, 8.0, 6.0), seed=4, **kwargs):
+    system = lbmd.System(box_l=list(box))
+    system.time_step = 0.1
+    params = dict(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, ext_force_density=[1e-3, -5e-4, 2e-4])
+    params.update(kwargs)
+    lbf = lbmd.lb.LBFluid(single_precision=single_precision, **params)
+    system.actors.add(lbf)
+    rng = np.random.default_rng(seed)
+    shape = lbf.shape
+    x = 2 * np.pi * (np.arange(shape[0]) + 0.5) / shape[0]
+    lbf[:, :, :].velocity = (0.05 * np.sin(x)[:, None, None, None] * np.array([0.0, 1.0, 0.5])
+                             + 0.01 * rng.uniform(-1, 1, tuple(shape) + (3,)))
+    return system, lbf
+
+
+class SinglePrecision(unittest.TestCase):
+
+    def test_parameter(self):
+        s = lbmd.System(box_l=[4.0, 4.0, 4.0])
+        s.time_step = 0.1
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1)
+        self.assertFalse(lbf.single_precision)
+        s.actors.add(lbf)
+        self.assertFalse(lbf._core.single_precision)
+        s.actors.clear()
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, single_precision=True)
+        s.actors.add(lbf)
+        self.assertTrue(lbf.single_precision)
+        self.assertTrue(lbf._core.single_precision)
+        with self.assertRaisesRegex(TypeError, "single_precision' must be True or False"):
+            lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, single_precision="yes")
+        with self.assertRaisesRegex(AttributeError, "cannot be set after creation"):
+            lbf.single_precision = False
+
+    def test_poiseuille(self):
+        for nu, bound in ((1.0 / 6.0, 2e-4), (1.0, 2e-4)):
+            _, linf = poiseuille(20, None, nu_lattice=nu, height=20.0, unit_lattice=True,
+                                 single_precision=True)
+            self.assertLess(linf, bound, f"default MRT, nu_lattice={nu}")
+        # exact in double (1e-13): what remains is the float storage
+        _, linf = poiseuille(12, "TRT", single_precision=True)
+        self.assertLess(linf, 2e-4)
+        self.assertGreater(linf, 1e-9, "no float round-off: is the storage float?")
+
+    def test_mass_conservation(self):
+        system, lbf = periodic_fluid(True)
+        m0 = lbf.total_mass()
+        drift = 0.0
+        for _ in range(10):
+            system.integrator.run(100)
+            drift = max(drift, abs(lbf.total_mass() / m0 - 1.0))
+        self.assertLess(drift, 1e-6)
+        self.assertGreater(drift, 0.0, "mass exact to the last bit: float storage unused?")
+
+    def test_float_against_double(self):
+        results = {}
+        for sp in (False, True):
+            system, lbf = periodic_fluid(sp)
+            system.integrator.run(400)
+            pop = lbf[:, :, :].population
+            results[sp] = (lbf[:, :, :].velocity, pop)
+        u_double, pop_double = results[False]
+        u_single, pop_single = results[True]
+        scale = np.abs(u_double).max()
+        diff = np.abs(u_single - u_double).max() / scale
+        self.assertGreater(diff, 1e-9, "float and double runs agree too well: float storage unused?")
+        self.assertLess(diff, 1e-4)
+        # every stored population is a float; in double almost none is
+        np.testing.assert_array_equal(pop_single.astype(np.float32).astype(float), pop_single)
+        self.assertLess(np.mean(pop_double.astype(np.float32).astype(float) == pop_double), 0.01)
+
+    def test_node_access(self):
+        system, lbf = periodic_fluid(True)
+        pop = np.array(lbf[1, 2, 3].population)
+        new = pop * (1.0 + 1e-3 * np.arange(19) / 19)
+        lbf[1, 2, 3].population = new
+        # rounded to float, nothing else
+        np.testing.assert_array_equal(lbf[1, 2, 3].population, new.astype(np.float32).astype(float))
+        lbf[4, 5, 0].velocity = [0.01, -0.02, 0.03]
+        np.testing.assert_allclose(lbf[4, 5, 0].velocity, [0.01, -0.02, 0.03], rtol=1e-5)
+        lbf[4, 5, 0].density = 1.3
+        self.assertAlmostEqual(lbf[4, 5, 0].density, 1.3, delta=1e-6)
+
+    def test_thermal(self):
+        kT_set = 1e-4
+        system = lbmd.System(box_l=[8.0, 8.0, 8.0])
+        system.time_step = 0.1
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, kT=kT_set, seed=11,
+                              single_precision=True)
+        system.actors.add(lbf)
+        system.integrator.run(100)
+        samples = []
+        for _ in range(300):
+            system.integrator.run(5)
+            samples.append(lbf[:, :, :].velocity.reshape(-1, 3))
+        kT = np.mean(np.array(samples) ** 2) * lbf.agrid ** 3
+        self.assertAlmostEqual(kT / kT_set, 1.0, delta=0.02)
+        # the noise acts on non-conserved modes only; the float round-off of
+        # 512 nodes over 1600 updates remains (measured 5e-6 of
+        # mass sqrt(kT); noise that did not conserve momentum would give
+        # ~1e2 of it)
+        mass = lbf.total_mass()
+        np.testing.assert_allclose(lbf.total_momentum(), 0.0, atol=1e-4 * mass * np.sqrt(kT_set))
+
+    def test_coupling_momentum(self):
+        system = lbmd.System(box_l=[8.0, 8.0, 8.0])
+        system.time_step = 0.01
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=3.0, tau=0.05, single_precision=True)
+        system.actors.add(lbf)
+        system.thermostat.set_lb(LB_fluid=lbf, gamma=2.0)
+        v0 = np.array([2.0, 1.5, -1.0])
+        system.part.add(pos=[7.9, 7.95, 0.05], v=v0, mass=1.0)
+        p0 = system.analysis.linear_momentum()
+        for _ in range(60):
+            system.integrator.run(1)
+            np.testing.assert_allclose(system.analysis.linear_momentum(), p0, rtol=0,
+                                       atol=2e-5 * np.linalg.norm(v0))
+        self.assertGreater(np.linalg.norm(lbf.total_momentum()), 0.1 * np.linalg.norm(v0))
+
+    def test_moving_wall_and_boundary_force(self):
+        # Couette flow: the top wall moves at u_w along x; steady profile
+        # linear between the walls (midway links), wall force = shear stress
+        system = lbmd.System(box_l=[4.0, 4.0, 12.0])
+        system.time_step = 1.0
+        u_w, nu = 0.01, 1.0 / 6.0 + 0.2
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=nu, tau=1.0, single_precision=True)
+        system.actors.add(lbf)
+        system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
+            shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=1.0)))
+        top = lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 0, -1], dist=-11.0),
+                                           velocity=[u_w, 0, 0])
+        system.lbboundaries.add(top)
+        system.integrator.run(3000)
+        z = np.arange(1, 11) + 0.5
+        expected = u_w * (z - 1.0) / 10.0
+        np.testing.assert_allclose(lbf[0, 0, 1:11].velocity[:, 0], expected, atol=1e-4 * u_w)
+        # the fluid drags the moving wall back: F = -rho nu u_w / h * area
+        np.testing.assert_allclose(top.get_force()[0], -nu * u_w / 10.0 * 16.0, rtol=1e-3)
+
+    def test_vtk(self):
+        import vtk
+        from vtk.util.numpy_support import vtk_to_numpy
+        system, lbf = periodic_fluid(True, box=(3.0, 4.0, 5.0))
+        system.integrator.run(5)
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "velocity.vtk")
+            lbf.write_vtk_velocity(path)
+            reader = vtk.vtkStructuredPointsReader()
+            reader.SetFileName(path)
+            reader.Update()
+            arr = vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("velocity"))
+        ours = lbf[:, :, :].velocity.transpose(2, 1, 0, 3)
+        np.testing.assert_allclose(arr.reshape(ours.shape), ours, rtol=1e-12, atol=1e-15)
+
+    def test_instability(self):
+        s = lbmd.System(box_l=[5.0, 6.0, 7.0])
+        s.time_step = 0.1
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, single_precision=True)
+        s.actors.add(lbf)
+        lbf[2, 3, 4].velocity = [0.0, 0.65 / 0.1, 0.0]  # 0.65 lattice units > c_s
+        with self.assertRaisesRegex(lbmd.SimulationInstability, r"node \(2, 3, 4\) in lattice update 0"):
+            s.integrator.run(2)
+
+
+if __name__ == "__main__":
+    unittest.main()
