@@ -38,7 +38,7 @@ Studies (each `run` row has `study` and the columns the chart needs):
   haematocrit and membrane-collision strength: the deepest node of one
   cell inside another and how many nodes are inside other cells.
 
-Default run about 5.5 min, --quick about 20 s (26 Nov 2026, the 2-core
+Default run about 7 min, --quick about 20 s (26 Nov 2026, the 2-core
 development VM). `--charts-from DIR` redraws the charts from the CSVs.
 """
 import argparse
@@ -518,26 +518,33 @@ def place_lattice(s, ct, layers, rng, tilt=0.04):
     return cells
 
 
-def study_contacts(quick, layers_list=None, strengths=None, pushes=None, t_end=None):
+def study_contacts(quick, layers_list=None, strengths=None, series=None, t_end=None):
     """Cells pressed together in shear flow: Couette flow (walls moving at
     +-u_wall, shear rate 0.011/us), rbc374 cells on a lattice of 1, 2, 4, 6
     or 8 layers (haematocrit 0.05 to 0.42), each node pushed towards the
     bottom wall (total `push` nN per cell, a centrifuge-like load that
     piles the upper row on the lower one); membrane collision
-    V = a/(1+e^(n d)), n 1.2, cutoff 0.5 (the paper's form), a varied, 0
+    V = a/(1+e^(n d)), cutoff 0.5: the paper's n 1.2 with a varied, 0
     included (no contact force: shows what the measure sees when nothing
-    keeps the membranes apart). Samples the deepest interpenetration every
-    tenth of the run."""
+    keeps the membranes apart), and at the larger load a steeper n 10 (the
+    barrier a (1/2 - 1/(1+e^(n cutoff))) and the largest pair force a n/4
+    both grow with n) and a longer cutoff 1.0 (longer than rbc374's edges,
+    0.65 um: a node cannot slip between the other membrane's nodes).
+    Shear rate 0.011/us. Samples the deepest interpenetration every tenth of
+    the run."""
     layers_list = layers_list or ((8,) if quick else (1, 4, 8))
     strengths = strengths or ((0.0, 1e-1) if quick else (0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0))
-    pushes = pushes or ((2.0,) if quick else (0.5, 2.0))
+    # (push nN per cell, steepness n, cutoff, strengths a or None for `strengths`)
+    series = series or (((2.0, 1.2, 0.5, None),) if quick else
+                        ((0.5, 1.2, 0.5, None), (2.0, 1.2, 0.5, None), (2.0, 10.0, 0.5, (0.01, 0.1, 1.0)),
+                         (2.0, 1.2, 1.0, (0.1, 1.0))))
     t_end = t_end or (100.0 if quick else 200.0)
     lx, ly, lz = CONTACT_BOX
     u_wall = 0.1
     rows = []
-    for push in pushes:
+    for push, steep, cutoff, own in series:
         for layers in layers_list:
-            for a in strengths:
+            for a in own or strengths:
                 s = lbmd.System(box_l=[lx, ly, lz])
                 s.time_step = 0.1
                 s.cell_system.skin = 0.4
@@ -561,7 +568,7 @@ def study_contacts(quick, layers_list=None, strengths=None, pushes=None, t_end=N
                     c.set_force([0.0, 0.0, -push / n])
                 h_real = len(cells) * ct.volume0 / (lx * ly * (lz - 2 * WALL))
                 s.non_bonded_inter[0, 10].soft_sphere.set_params(a=1e-4, n=1.2, cutoff=0.5, offset=0.0)
-                s.non_bonded_inter[0, 0].membrane_collision.set_params(a=a, n=1.2, cutoff=0.5, offset=0.0)
+                s.non_bonded_inter[0, 0].membrane_collision.set_params(a=a, n=steep, cutoff=cutoff, offset=0.0)
                 s.thermostat.set_lb(LB_fluid=lbf, gamma=ct.suggest_LBgamma(visc=VISC, dens=DENS))
                 steps = int(t_end / 0.1)
                 deepest, inside_max, crossed_max, outcome = 0.0, 0, 0, "ran"
@@ -581,12 +588,13 @@ def study_contacts(quick, layers_list=None, strengths=None, pushes=None, t_end=N
                     deepest, inside_max, crossed_max = max(deepest, d), max(inside_max, ins), max(crossed_max, cr)
                     vol_drift = max(vol_drift, max(abs(c.volume() / ct.volume0 - 1) for c in cells))
                 rows.append({"study": "contacts", "haematocrit": h_real, "layers": layers, "cells": len(cells),
-                             "push_nN_per_cell": push, "a": a, "n": 1.2, "cutoff": 0.5,
-                             "max_pair_force": a * 1.2 / 4, "shear_rate": 2 * u_wall / (lz - 2 * WALL),
+                             "push_nN_per_cell": push, "a": a, "n": steep, "cutoff": cutoff,
+                             "max_pair_force": a * steep / 4,
+                             "barrier": a * (0.5 - 1 / (1 + np.exp(steep * cutoff))), "shear_rate": 2 * u_wall / (lz - 2 * WALL),
                              "t_end": t_end, "deepest_um": deepest, "nodes_inside_max": inside_max,
                              "cells_crossed_max": crossed_max, "first_inside_step": first_inside or -1,
                              "volume_drift_max": vol_drift, "outcome": outcome, "cpu_s": cost})
-                print(f"contacts push {push} H {h_real:.3f} ({len(cells)} cells) a {a:g}: deepest {deepest:.3f} um, "
+                print(f"contacts push {push} n {steep} cutoff {cutoff} H {h_real:.3f} ({len(cells)} cells) a {a:g}: deepest {deepest:.3f} um, "
                       f"nodes inside {inside_max}, crossed {crossed_max}, {outcome[:60]}, {cost:.1f} s", flush=True)
     return rows
 
@@ -738,12 +746,12 @@ def charts(results, outdir, dpi=90):
 
     rows = results.get("cells_contacts")
     if rows:
-        pushes = sorted(set(r["push_nN_per_cell"] for r in rows))
-        fig, axes = plt.subplots(1, len(pushes), figsize=(4.8 * len(pushes) + 1, 3.8), squeeze=False,
+        combos = list(dict.fromkeys((r["push_nN_per_cell"], r["n"], r["cutoff"]) for r in rows))
+        fig, axes = plt.subplots(1, len(combos), figsize=(3.9 * len(combos) + 1, 3.8), squeeze=False,
                                  constrained_layout=True)
         vmax = max(0.5, max(r["deepest_um"] for r in rows))
-        for ax, push in zip(axes[0], pushes):
-            rr = [r for r in rows if r["push_nN_per_cell"] == push]
+        for ax, (push, steep, cut) in zip(axes[0], combos):
+            rr = [r for r in rows if (r["push_nN_per_cell"], r["n"], r["cutoff"]) == (push, steep, cut)]
             h = [r["haematocrit"] for r in rr]
             a = [max(r["a"], 1e-5) for r in rr]
             sc = ax.scatter(h, a, c=[r["deepest_um"] for r in rr], s=90, cmap="viridis_r", vmin=0, vmax=vmax)
@@ -755,8 +763,10 @@ def charts(results, outdir, dpi=90):
             ax.set_yscale("log")
             ax.set_xlabel("haematocrit")
             ax.set_xlim(0, 0.5)
+            ax.set_ylim(5e-6, 3)
             ax.set_ylabel("collision a (1e-5: a = 0)")
-            ax.set_title(f"push {push:g} nN/cell, shear 0.011/us\nlabels: most nodes inside other cells", fontsize=8)
+            ax.set_title(f"push {push:g} nN/cell, n {steep:g}, cutoff {cut:g}\nlabels: most nodes inside others",
+                         fontsize=8)
         fig.colorbar(sc, ax=axes[0].tolist(), label="deepest interpenetration (um)")
         path = os.path.join(outdir, "cells_contacts.png")
         fig.savefig(path, dpi=dpi)
