@@ -10,18 +10,19 @@ import oif
 from lbmd.settings_check import SettingsWarning
 
 
-def scene(visc=1.5, tau=0.1, dt=0.1, gamma=1.5, ks=0.005, contact=True, cells=2):
+def scene(visc=1.5, tau=0.1, dt=0.1, gamma=1.5, kb=0.02, contact=(0.1, 1.0), cells=2):
     s = lbmd.System(box_l=[40.0, 20.0, 20.0])
     s.time_step = dt
     lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=visc, tau=tau)
     s.actors.add(lbf)
     ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(4.0, 4.0, 4.0), normal=True,
-                         ks=ks, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
+                         ks=0.005, kb=kb, kal=0.007, kag=0.7, kv=0.9)
     # the script keeps its cells (check_settings sees the living OifCells)
     cell_list = [oif.OifCell(cell_type=ct, particle_type=0, origin=[10.0 + 15 * k, 10.0, 10.0])
                  for k in range(cells)]
     if contact:
-        s.non_bonded_inter[0, 0].membrane_collision.set_params(a=1e-4, n=1.2, cutoff=0.5)
+        a, cutoff = contact
+        s.non_bonded_inter[0, 0].membrane_collision.set_params(a=a, n=1.2, cutoff=cutoff)
     s.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
     return s, lbf, cell_list
 
@@ -38,7 +39,9 @@ class CheckSettings(unittest.TestCase):
         self.assertEqual(report.warnings(), [], str(report))
         names = " ".join(x.name for x in report)
         for what in ("relaxation time", "Mach", "precision", "radius / agrid", "mean edge / agrid",
-                     "time step against ks", "gamma * time_step / mass"):
+                     "mesh resolution", "time step against the membrane (kb, kal)",
+                     "gamma * time_step / mass", "gamma N tau / (dens S agrid)",
+                     "contact between cell types 0 and 0"):
             self.assertIn(what, names)
         self.assertIn("expect", str(report))
 
@@ -51,18 +54,24 @@ class CheckSettings(unittest.TestCase):
         c_s = 1.0 / 0.1 / 3 ** 0.5
         lbf[5, 5, 5].velocity = [0.35 * c_s, 0.0, 0.0]
         self.assertIn("Mach number (fastest node now)", warned(s.check_settings()))
-        # ks so stiff that dt = 0.1 is beyond half of 2 sqrt(m / 6 ks): ks 100
-        s, _, kept = scene(ks=100.0)
-        self.assertIn("time step against ks", warned(s.check_settings()))
+        # kb 1000 times the paper's: measured stable only below dt 0.05 / 1000
+        s, _, kept = scene(kb=20.0)
+        self.assertIn("time step against the membrane (kb, kal)", warned(s.check_settings()))
+        # the coupling: gamma N tau / (rho S agrid) = 10 * 374 * 0.1 / 134 = 2.8 > 1
+        s, _, kept = scene(gamma=10.0)
+        self.assertIn("coupling gamma N tau / (dens S agrid)", warned(s.check_settings()))
+        # the paper's contact (a 1e-4, cutoff 0.5 < the longest edge 0.85): cells cross
+        s, _, kept = scene(contact=(1e-4, 0.5))
+        self.assertIn("contact between cell types 0 and 0", warned(s.check_settings()))
         # gamma dt / m = 1.5 * 1.0 = 1.5 > 1
         s, _, kept = scene(gamma=1.5, dt=1.0, tau=1.0, visc=0.15)
         self.assertIn("coupling gamma * time_step / mass", warned(s.check_settings()))
         # two cells, no contact between their type
-        s, _, kept = scene(contact=False)
+        s, _, kept = scene(contact=None)
         self.assertIn("contact between cell types 0 and 0", warned(s.check_settings()))
 
     def test_first_run_warns_once(self):
-        s, _, kept = scene(contact=False)
+        s, _, kept = scene(contact=None)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             s.integrator.run(2)

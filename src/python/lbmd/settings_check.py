@@ -19,11 +19,22 @@ maintainer/benchmarks/accuracy_vs_cost.py) or a stated estimate:
   leaves lattice nodes between membrane nodes (fluid passes through the
   membrane, Cimrak et al. 2012 use edges about agrid), shorter than
   agrid / 2 adds nodes the lattice cannot resolve (cost, no accuracy).
-- the time step against the membrane's stiffness: explicit velocity Verlet
-  is stable for omega dt < 2 with omega^2 = k / m; k is estimated as six
-  stretching springs per node (ks at rest: F = ks (l - l0), doc/model.md).
-- the coupling: gamma dt / m above about 1 makes particles and fluid
-  overshoot (the engine names it when the fluid blows up).
+- the mesh's node count against the error of a cell's shape (stretched
+  diameters, extents in flow) relative to rbc2562: rbc162 4-5 %, rbc374
+  1.2-4.5 %, rbc642 0.5-1.3 %, rbc1002 0.2-1.4 %.
+- the time step against the membrane's stiffness (a free cell at node
+  mass 1): stable up to dt 0.81 for rbc374 and 0.10 for rbc1002 at the
+  paper's moduli (ks 0.005, kb 0.02, kal 0.007), falling as N^-2.1 with
+  the node count; for kb or kal raised above those, dt <= 0.05 k_paper / k
+  held at every point measured; ks hardly matters. The mass enters as
+  sqrt(m) (omega^2 = k / m; an estimate beyond the measured m = 1).
+- the coupling: the fluid blew up where gamma N dt / (rho S agrid) reached
+  1.4-2.1 (N nodes on the cell's surface S), whatever the mesh; advised
+  below 1. gamma dt / m above about 1 makes particles overshoot too.
+- contacts: with the membrane_collision cutoff + offset shorter than the
+  mesh's longest edge, cells cross (up to 176 nodes inside others at the
+  paper's a 1e-4, cutoff 0.5, edges up to 0.85); a cutoff longer than the
+  edges kept them apart at a 0.1 up to haematocrit 0.42.
 """
 import math
 import warnings
@@ -38,6 +49,14 @@ MACH_ADVISED, MACH_LIMIT = 0.1, 0.2
 MACH_ERROR = ((0.03, 7.5e-7), (0.043, 1.2e-5), (0.17, 3e-3))
 EDGE_PER_AGRID = (0.5, 2.0)
 GAMMA_DT_PER_MASS_MAX = 1.0
+#: shape error against rbc2562 (stretch and flow, largest of both) by nodes
+MESH_ERROR = ((162, 0.05), (374, 0.045), (642, 0.013), (1002, 0.014), (2562, 0.0))
+#: membrane time-step limit at the paper's moduli, node mass 1
+MEMBRANE_DT = ((374, 0.81), (1002, 0.10))
+PAPER_KB, PAPER_KAL = 0.02, 0.007
+#: gamma N dt / (rho S agrid): measured fluid blow-up from 1.4
+COUPLING_ADVISED, COUPLING_FAILED = 1.0, 1.4
+CONTACT_A_NONE = 1e-3  # the paper's a = 1e-4 acted like no contact at all
 
 
 class Setting:
@@ -154,31 +173,65 @@ def _cell_settings(system, fluid, gamma, report):
                 "fluid passes between the membrane's nodes" if ratio > hi else
                 "the membrane and the lattice resolve each other",
                 "a coarser mesh would do for the coupling" if ratio < lo else "", ok=ratio <= hi))
-        # time step against the stiffest elastic response of a node
-        k = 6.0 * (cell_type.ks + cell_type.kslin)
-        if k > 0:
-            dt_max = 2.0 * math.sqrt(mass / k)
-            report.append(Setting(
-                f"{label}: time step against ks", f"{dt:.3g}",
-                f"estimated limit 2 sqrt(m / 6 ks) = {dt_max:.3g}",
-                "stable" if dt < 0.5 * dt_max else "near the stability limit of the membrane",
-                f"the membrane would stay stable up to a time step of about {0.5 * dt_max:.3g} "
-                f"(tau of the fluid a multiple of it)" if dt < 0.05 * dt_max else "",
-                ok=dt < 0.5 * dt_max))
+        # mesh resolution against the measured shape error
+        err = float(np.interp(nodes, [p[0] for p in MESH_ERROR], [p[1] for p in MESH_ERROR]))
+        report.append(Setting(
+            f"{label}: mesh resolution", f"{nodes} nodes", "rbc374 for 1-5 %, 642+ below 1.5 %",
+            f"shape (diameters, extents in flow) within about {100 * err:.1f} % of the finest mesh"
+            if nodes < 2562 else "the finest mesh measured",
+            "rbc1002 is within 0.2-1.4 % at a quarter of rbc2562's cost" if nodes > 1002 else ""))
+        # time step against the membrane (measured free-cell limits)
+        xs = np.log([p[0] for p in MEMBRANE_DT])
+        ys = np.log([p[1] for p in MEMBRANE_DT])
+        slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
+        dt_paper = math.exp(ys[0] + slope * (math.log(nodes) - xs[0]))
+        limits = [dt_paper]
+        if cell_type.kb > PAPER_KB:
+            limits.append(0.05 * PAPER_KB / cell_type.kb)
+        if cell_type.kal > PAPER_KAL:
+            limits.append(0.05 * PAPER_KAL / cell_type.kal)
+        dt_max = min(limits) * math.sqrt(mass)
+        report.append(Setting(
+            f"{label}: time step against the membrane (kb, kal)", f"{dt:.3g}",
+            f"measured stable up to about {dt_max:.3g} (free cell)",
+            "stable" if dt <= 0.5 * dt_max else "near or past the membrane's stability limit",
+            f"the membrane alone would allow a time step of about {0.5 * dt_max:.3g}"
+            if dt < 0.1 * dt_max else "", ok=dt <= 0.5 * dt_max))
         if gamma:
             kick = gamma * dt / mass
             report.append(Setting(
                 f"{label}: coupling gamma * time_step / mass", f"{kick:.3g}",
                 f"< {GAMMA_DT_PER_MASS_MAX}",
-                f"total friction of a cell {gamma * nodes:.4g} (gamma x nodes; keep it when "
-                f"changing the mesh)", ok=kick < GAMMA_DT_PER_MASS_MAX))
+                f"total friction of a cell gamma N = {gamma * nodes:.4g} (keep it when changing "
+                f"the mesh: oif's suggest_LBgamma)", ok=kick < GAMMA_DT_PER_MASS_MAX))
+            if fluid is not None:
+                tau = fluid.tau
+                density = gamma * nodes * tau / (fluid.dens * cell_type.surface0 * fluid.agrid)
+                report.append(Setting(
+                    f"{label}: coupling gamma N tau / (dens S agrid)", f"{density:.3g}",
+                    f"advised < {COUPLING_ADVISED}; the fluid blew up from {COUPLING_FAILED}",
+                    "stable" if density < COUPLING_ADVISED else "near the coupling's stability limit",
+                    ok=density < COUPLING_ADVISED))
     # contacts between the cells' particle types
     cell_types = sorted({int(t) for c in cells for t in np.unique(c.particles.type)})
     if len(cells) > 1:
         for i, a in enumerate(cell_types):
             for b in cell_types[i:]:
                 pair = system.non_bonded_inter[a, b]
-                if not (pair.membrane_collision.is_active() or pair.soft_sphere.is_active()):
+                if pair.membrane_collision.is_active():
+                    p = pair.membrane_collision.get_params()
+                    reach = p["cutoff"] + p["offset"]
+                    edge = max(float(np.max(ct.r0)) for ct, _ in types.values())
+                    weak = p["a"] < CONTACT_A_NONE
+                    report.append(Setting(
+                        f"contact between cell types {a} and {b}",
+                        f"membrane_collision a {p['a']:g}, cutoff + offset {reach:g}",
+                        f"reach > longest mesh edge {edge:.3g}; a >= {CONTACT_A_NONE:g}",
+                        "measured: cells kept apart up to haematocrit 0.42" if reach > edge and not weak
+                        else "measured: cells cross each other (the engine stops the run with "
+                        "membrane_crossing): a cutoff longer than the edges and a >= 0.1 held them",
+                        ok=reach > edge and not weak))
+                elif not pair.soft_sphere.is_active():
                     report.append(Setting(
                         f"contact between cell types {a} and {b}", "none", "a pair contact",
                         "the cells pass through each other unseen (no crossing check without a "
