@@ -213,7 +213,7 @@ void LBFluid::allocate_subdomain() {
     for (int y = 1; y <= m_n[1]; ++y)
       for (int z = 1; z <= m_n[2]; ++z)
         for (int q = 0; q < Q; ++q)
-          set_population_at(q * m_stride + index(x, y, z), w[q] * m_p.density);
+          set_full_population(q, q * m_stride + index(x, y, z), w[q] * m_p.density);
 }
 
 std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& boundaries) const {
@@ -439,7 +439,7 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
         const std::size_t n = index(x, y, z);
         if (old_flag[n] != 0 && m_flag[n] == 0)
           for (int q = 0; q < Q; ++q)
-            set_population_at(q * m_stride + n, w[q] * m_p.density);
+            set_full_population(q, q * m_stride + n, w[q] * m_p.density);
         if (m_flag[n] != 0)
           for (int q = 0; q < Q; ++q)
             set_population_at(q * m_stride + n, 0.0);
@@ -535,7 +535,7 @@ Vec3 LBFluid::boundary_force(int b) const {
   for (const Link& l : m_links) {
     if (l.boundary != b)
       continue;
-    const double back = population_at(population_slot(opposite(l.q), l.node));
+    const double back = full_population(opposite(l.q), population_slot(opposite(l.q), l.node));
     const double transfer = 2.0 * back + l.wall_term;
     for (int d = 0; d < 3; ++d)
       sum[d] += c[l.q][d] * transfer;
@@ -661,7 +661,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // on every rank (it decides collective recomputations)
         if (prop == "population") {
           for (int q = 0; q < Q; ++q)
-            set_population_at(population_slot(q, own), v[q]);
+            set_full_population(q, population_slot(q, own), v[q]);
           continue;
         }
         const double rho = prop == "density" ? v[0] : node_density(node);
@@ -669,7 +669,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
         const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
         for (int q = 0; q < Q; ++q)
-          set_population_at(population_slot(q, own), equilibrium(q, rho, u_lattice));
+          set_full_population(q, population_slot(q, own), equilibrium(q, rho, u_lattice));
       }
 }
 
@@ -703,7 +703,7 @@ Populations LBFluid::node_populations(const Vec3i& node) const {
     return f;
   }
   for (int q = 0; q < Q; ++q)
-    f[q] = population_at(population_slot(q, n));
+    f[q] = full_population(q, population_slot(q, n));
   return f;
 }
 
@@ -725,7 +725,7 @@ void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
     require(std::isfinite(f[q]), "population: values must be finite");
   ++m_state_version; // after the checks: a refused call changes nothing
   for (int q = 0; q < Q; ++q)
-    set_population_at(population_slot(q, n), f[q]);
+    set_full_population(q, population_slot(q, n), f[q]);
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
@@ -737,7 +737,7 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
   const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
   ++m_state_version;
   for (int q = 0; q < Q; ++q)
-    set_population_at(population_slot(q, n), equilibrium(q, rho, u_lattice));
+    set_full_population(q, population_slot(q, n), equilibrium(q, rho, u_lattice));
 }
 
 void LBFluid::open_impulse_field() {
@@ -780,6 +780,10 @@ double LBFluid::total_mass() const {
         for (int i = 0; i < r.length; ++i)
           mass += f[i];
       }
+    // deviation storage (single precision): each fluid node holds rho0 more
+    if constexpr (std::is_same_v<std::remove_const_t<std::remove_pointer_t<decltype(populations)>>,
+                                 float>)
+      mass += m_p.density * static_cast<double>(m_n_fluid);
   });
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, &mass, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());

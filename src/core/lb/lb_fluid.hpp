@@ -37,8 +37,14 @@
 // Precision: the populations are stored as double, or as float when
 // single_precision (LBParams). Every function that touches them is a
 // template on the stored type (Real), chosen once per call, outside the
-// node loops; the collision loads float, computes in double and rounds the
-// result to float once per population and update.
+// node loops. In single precision the array holds the deviations
+// g_q = f_q - w_q rho0 from the rest state at the reference density rho0 =
+// `dens` (Skordos, Phys. Rev. E 48, 4823 (1993)): a fluid near rest stores
+// values near 0, so float keeps ~7 digits of the small non-equilibrium parts
+// instead of ~7 digits of w_q rho0, and the collision computes in float on
+// them (lb_kernel.cpp). Halo copies and bounce-back (f_-q = f_q - wall term,
+// w_q = w_-q) act on the deviations unchanged; everything that needs a full
+// population adds w_q rho0 back (full_population, moments, total_mass).
 //
 // Units: populations are mass densities (the unit of `dens`); velocities in
 // the kernel are lattice velocities u * tau / agrid, force densities are
@@ -57,6 +63,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -80,8 +87,8 @@ struct LBParams {
   std::uint64_t seed = 0;
   Collision collision = Collision::mrt;
   int n_threads = 0; ///< 0: OMP_NUM_THREADS if set, else 1
-  /// populations stored as float (the collision still computes in double):
-  /// half the memory and half the traffic of the memory-bound update
+  /// populations stored as float, as deviations from the rest state at
+  /// `density`, and collided in float: half the memory and traffic
   bool single_precision = false;
 };
 
@@ -427,7 +434,8 @@ private:
       return body(static_cast<float*>(m_f));
     return body(static_cast<double*>(m_f));
   }
-  /** The population at offset `slot` of the array (any precision). */
+  /** The stored value at offset `slot` of the array (any precision; in
+   *  single precision a deviation, see full_population). */
   double population_at(std::size_t slot) const {
     return m_p.single_precision ? double(static_cast<const float*>(m_f)[slot])
                                 : static_cast<const double*>(m_f)[slot];
@@ -436,6 +444,24 @@ private:
   void set_population_at(std::size_t slot, double v) {
     if (m_p.single_precision)
       static_cast<float*>(m_f)[slot] = static_cast<float>(v);
+    else
+      static_cast<double*>(m_f)[slot] = v;
+  }
+  /** What the array holds less the population: w_q rho0 in single
+   *  precision (deviation storage, see top), 0 in double. */
+  double rest_population(int q) const {
+    return m_p.single_precision ? d3q19::w[q] * m_p.density : 0.0;
+  }
+  /** The full population q at offset `slot` (any precision). */
+  double full_population(int q, std::size_t slot) const {
+    if (m_p.single_precision)
+      return double(static_cast<const float*>(m_f)[slot]) + rest_population(q);
+    return static_cast<const double*>(m_f)[slot];
+  }
+  /** Stores the full population v of direction q at offset `slot`. */
+  void set_full_population(int q, std::size_t slot, double v) {
+    if (m_p.single_precision)
+      static_cast<float*>(m_f)[slot] = static_cast<float>(v - rest_population(q));
     else
       static_cast<double*>(m_f)[slot] = v;
   }
@@ -569,6 +595,8 @@ inline void LBFluid::moments_of(const Real* populations, std::size_t n, double& 
     if (d3q19::c[q][2])
       jz += d3q19::c[q][2] * v;
   }
+  if constexpr (std::is_same_v<Real, float>)
+    r += m_p.density; // deviation storage: sum_q w_q rho0 = rho0
   rho = r;
   j = Vec3(jx, jy, jz);
 }

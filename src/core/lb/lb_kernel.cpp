@@ -182,6 +182,141 @@ __attribute__((always_inline)) inline NodeResult collide(const double* f, const 
   return {rho, u2};
 }
 
+/** Density and speed^2 of a node in the arithmetic type T. */
+template <typename T> struct NodeResultOf { T rho, u2; };
+
+template <typename T> inline bool out_of_range(const NodeResultOf<T>& res) {
+  return !(res.rho > T(0)) | !(res.rho <= std::numeric_limits<T>::max()) | !(res.u2 < T(u2_limit));
+}
+
+/** The relaxation factors in the arithmetic type T. */
+template <typename T> struct RelaxationOf {
+  T shear, bulk, even, odd;
+  explicit RelaxationOf(const Relaxation& l)
+      : shear(T(l.shear)), bulk(T(l.bulk)), even(T(l.even)), odd(T(l.odd)) {}
+};
+
+/** collide() on the deviations g_q = f_q - w_q rho0 from the rest state at
+ *  the reference density rho0 (single precision's storage, lb_fluid.hpp),
+ *  in the arithmetic type T. Skordos, Phys. Rev. E 48, 4823 (1993): with
+ *  f_q = w_q rho0 + g_q every moment splits into the rest state's and the
+ *  deviations' (sum_q w_q = 1, sum_q w_q c_q = 0, sum_q w_q c_q c_q = I/3):
+ *    rho = rho0 + drho, drho = sum g;  j = sum c g;
+ *    Pi = rho0/3 I + Pi_g, Pi_g = sum c c g;
+ *    Pi_neq = Pi - rho/3 I - rho u u = Pi_g - drho/3 I - rho u u,
+ *  and the post-collision deviation g* = f* - w rho0 follows from collide()'s
+ *  f* with f_eq - w rho0 = w (drho + rho (3 c.u + 9/2 (c.u)^2 - 3/2 u^2)):
+ *    g+* = (1 - l_e) w (drho + rho (9/2 (c.u)^2 - 3/2 u^2)) + l_e g+
+ *          + w/(2 c_s^4) H:B   (l_e w rho0 of the ghost term cancels),
+ *    g-* = f-* (the rest state has no odd part).
+ *  Every term is then of the size of the deviations, not of w rho0, so the
+ *  rounding of T (float: 6e-8 relative) falls on the small parts only. */
+template <typename T, bool even_ghosts_relaxed>
+__attribute__((always_inline)) inline NodeResultOf<T>
+collide_deviation(const T* g, const T* F, const RelaxationOf<T>& l, T rho0, T* out) {
+  T s[n_pairs], d[n_pairs];
+#pragma GCC unroll 9
+  for (int k = 0; k < n_pairs; ++k) {
+    s[k] = g[2 * k + 1] + g[2 * k + 2];
+    d[k] = g[2 * k + 1] - g[2 * k + 2];
+  }
+  T drho = g[0], j[3] = {T(0), T(0), T(0)};
+  T pi_xx = T(0), pi_yy = T(0), pi_zz = T(0), pi_xy = T(0), pi_xz = T(0), pi_yz = T(0);
+  for_each_pair([&](auto K) __attribute__((always_inline)) {
+    constexpr int k = decltype(K)::value;
+    constexpr int cx = c[2 * k + 1][0], cy = c[2 * k + 1][1], cz = c[2 * k + 1][2];
+    drho += s[k];
+    if constexpr (cx != 0)
+      j[0] += T(cx) * d[k];
+    if constexpr (cy != 0)
+      j[1] += T(cy) * d[k];
+    if constexpr (cz != 0)
+      j[2] += T(cz) * d[k];
+    if constexpr (cx != 0)
+      pi_xx += s[k];
+    if constexpr (cy != 0)
+      pi_yy += s[k];
+    if constexpr (cz != 0)
+      pi_zz += s[k];
+    if constexpr (cx * cy != 0)
+      pi_xy += T(cx * cy) * s[k];
+    if constexpr (cx * cz != 0)
+      pi_xz += T(cx * cz) * s[k];
+    if constexpr (cy * cz != 0)
+      pi_yz += T(cy * cz) * s[k];
+  });
+  const T rho = rho0 + drho;
+  const T inv_rho = T(1) / rho;
+  const T u[3] = {(j[0] + T(0.5) * F[0]) * inv_rho, (j[1] + T(0.5) * F[1]) * inv_rho,
+                  (j[2] + T(0.5) * F[2]) * inv_rho};
+  const T u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+  // non-equilibrium stress: Pi_g - drho c_s^2 I - rho u u
+  const T third_drho = drho * T(1.0 / 3.0);
+  const T n_xx = pi_xx - third_drho - rho * u[0] * u[0];
+  const T n_yy = pi_yy - third_drho - rho * u[1] * u[1];
+  const T n_zz = pi_zz - third_drho - rho * u[2] * u[2];
+  const T n_xy = pi_xy - rho * u[0] * u[1];
+  const T n_xz = pi_xz - rho * u[0] * u[2];
+  const T n_yz = pi_yz - rho * u[1] * u[2];
+  const T n_iso = (n_xx + n_yy + n_zz) * T(1.0 / 3.0);
+  const T uf_iso = T(2.0 / 3.0) * (u[0] * F[0] + u[1] * F[1] + u[2] * F[2]);
+  const T shear_src = T(0.5) * (T(1) + l.shear), bulk_src = T(0.5) * (T(1) + l.bulk);
+  const T l_even = even_ghosts_relaxed ? T(0) : l.even;
+  const T l_odd = l.odd;
+  const T ds = l.shear - l_even, db = l.bulk - l_even;
+  const T iso = db * n_iso + bulk_src * uf_iso;
+  const T b_xx = ds * (n_xx - n_iso) + shear_src * (T(2) * u[0] * F[0] - uf_iso) + iso;
+  const T b_yy = ds * (n_yy - n_iso) + shear_src * (T(2) * u[1] * F[1] - uf_iso) + iso;
+  const T b_zz = ds * (n_zz - n_iso) + shear_src * (T(2) * u[2] * F[2] - uf_iso) + iso;
+  const T b_xy = ds * n_xy + shear_src * (u[0] * F[1] + u[1] * F[0]);
+  const T b_xz = ds * n_xz + shear_src * (u[0] * F[2] + u[2] * F[0]);
+  const T b_yz = ds * n_yz + shear_src * (u[1] * F[2] + u[2] * F[1]);
+  const T tr_b_third = (b_xx + b_yy + b_zz) * T(1.0 / 3.0);
+  const T one_minus_le = T(1) - l_even;
+  const T jj[3] = {(T(1) - l_odd) * j[0] + F[0], (T(1) - l_odd) * j[1] + F[1],
+                   (T(1) - l_odd) * j[2] + F[2]};
+  const T rest_eq = drho - T(1.5) * rho * u2; // (f_eq - w rho0) / w without the c.u terms
+  T out0 = one_minus_le * T(w[0]) * rest_eq;
+  if constexpr (!even_ghosts_relaxed)
+    out0 += l_even * g[0];
+  out[0] = out0 - T(w[0] * 4.5) * tr_b_third;
+  for_each_pair([&](auto K) __attribute__((always_inline)) {
+    constexpr int k = decltype(K)::value;
+    constexpr int cx = c[2 * k + 1][0], cy = c[2 * k + 1][1], cz = c[2 * k + 1][2];
+    constexpr double wk = w[2 * k + 1];
+    T cu = T(0), cbc = T(0), cj = T(0);
+    if constexpr (cx != 0) {
+      cu += T(cx) * u[0];
+      cbc += b_xx;
+      cj += T(cx) * jj[0];
+    }
+    if constexpr (cy != 0) {
+      cu += T(cy) * u[1];
+      cbc += b_yy;
+      cj += T(cy) * jj[1];
+    }
+    if constexpr (cz != 0) {
+      cu += T(cz) * u[2];
+      cbc += b_zz;
+      cj += T(cz) * jj[2];
+    }
+    if constexpr (cx * cy != 0)
+      cbc += T(2 * cx * cy) * b_xy;
+    if constexpr (cx * cz != 0)
+      cbc += T(2 * cx * cz) * b_xz;
+    if constexpr (cy * cz != 0)
+      cbc += T(2 * cy * cz) * b_yz;
+    T even = one_minus_le * T(wk) * (rest_eq + T(4.5) * rho * cu * cu);
+    if constexpr (!even_ghosts_relaxed)
+      even += T(0.5) * l_even * s[k];
+    even += T(wk * 4.5) * (cbc - tr_b_third);
+    const T odd = T(0.5) * l_odd * d[k] + T(3.0 * wk) * cj;
+    out[2 * k + 1] = even + odd;
+    out[2 * k + 2] = even - odd;
+  });
+  return {rho, u2};
+}
+
 } // namespace
 
 template <typename Real, bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
@@ -202,11 +337,21 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
   const std::size_t begin = r.start, end = r.start + r.length;
   // a node out of range: its moments, recomputed from the populations that
   // are still unwritten (the caller throws, the update is abandoned)
-  auto record_bad = [&](std::size_t n, const double* F) {
-    double fn[Q], out[Q];
+  // (in double, also in single precision: it is what the report shows)
+  constexpr bool deviations = std::is_same_v<Real, float>; // see lb_fluid.hpp
+  const RelaxationOf<double> l_double(l);
+  auto record_bad = [&](std::size_t n, const auto* F_in) {
+    double fn[Q], out[Q], F[3] = {double(F_in[0]), double(F_in[1]), double(F_in[2])};
     for (int q = 0; q < Q; ++q)
       fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
-    const NodeResult res = collide<false>(fn, F, l, out);
+    NodeResult res;
+    if constexpr (deviations) {
+      const NodeResultOf<double> dev =
+          collide_deviation<double, false>(fn, F, l_double, m_p.density, out);
+      res = {dev.rho, dev.u2};
+    } else {
+      res = collide<false>(fn, F, l, out);
+    }
     bad_node = {n, res.rho, std::sqrt(res.u2)};
     return true;
   };
@@ -225,9 +370,13 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
     constexpr std::size_t distance = 96 * sizeof(double) / sizeof(Real);
     constexpr int per_line = 64 / sizeof(Real);
     const Run* next_run = &r + 1 < m_runs.data() + m_runs.size() ? &r + 1 : nullptr;
-    // post-collision values, already rounded to the stored type
+    // post-collision values, already rounded to the stored type; the
+    // arithmetic: double on full populations, or float on the deviations
+    using Arith = Real;
+    const RelaxationOf<float> l_float(l);
+    const float rho0_float = static_cast<float>(m_p.density);
     alignas(64) Real fout[Q][block];
-    alignas(64) double force[3][block];
+    alignas(64) Arith force[3][block];
     for (std::size_t b0 = begin; b0 < end; b0 += block) {
       const int len = static_cast<int>(std::min<std::size_t>(block, end - b0));
       std::size_t ahead = b0 + distance;
@@ -237,9 +386,9 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
         for (int p = 0; p < block; p += per_line)
           __builtin_prefetch(f + read[q] + static_cast<std::ptrdiff_t>(ahead + p), 1, 2);
       for (int i = 0; i < len; ++i) {
-        force[0][i] = fx;
-        force[1][i] = fy;
-        force[2][i] = fz;
+        force[0][i] = static_cast<Arith>(fx);
+        force[1][i] = static_cast<Arith>(fy);
+        force[2][i] = static_cast<Arith>(fz);
       }
       // only nodes that received a deposit: a block without any reads nothing
       if (with_field) {
@@ -251,36 +400,58 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
         const double* __restrict gb = g + 3 * b0;
         for (std::uint32_t bits = valid; bits; bits &= bits - 1) {
           const int i = __builtin_ctz(bits);
-          force[0][i] += gb[3 * i];
-          force[1][i] += gb[3 * i + 1];
-          force[2][i] += gb[3 * i + 2];
+          force[0][i] = static_cast<Arith>(fx + gb[3 * i]);
+          force[1][i] = static_cast<Arith>(fy + gb[3 * i + 1]);
+          force[2][i] = static_cast<Arith>(fz + gb[3 * i + 2]);
         }
       }
       const Real* in[Q];
       for (int q = 0; q < Q; ++q)
         in[q] = f + read[q] + static_cast<std::ptrdiff_t>(b0);
       int bad = 0;
+      if constexpr (deviations) {
 #pragma GCC ivdep
-      for (int i = 0; i < len; ++i) {
-        double fn[Q], out[Q];
+        for (int i = 0; i < len; ++i) {
+          float gn[Q], out[Q];
 #pragma GCC unroll 19
-        for (int q = 0; q < Q; ++q)
-          fn[q] = in[q][i];
-        const double F[3] = {force[0][i], force[1][i], force[2][i]};
-        const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
+          for (int q = 0; q < Q; ++q)
+            gn[q] = in[q][i];
+          const float F[3] = {force[0][i], force[1][i], force[2][i]};
+          const NodeResultOf<float> res =
+              collide_deviation<float, even_ghosts_relaxed>(gn, F, l_float, rho0_float, out);
 #pragma GCC unroll 19
-        for (int q = 0; q < Q; ++q)
-          fout[q][i] = static_cast<Real>(out[q]);
-        bad |= out_of_range(res);
+          for (int q = 0; q < Q; ++q)
+            fout[q][i] = out[q];
+          bad |= out_of_range(res);
+        }
+      } else {
+#pragma GCC ivdep
+        for (int i = 0; i < len; ++i) {
+          double fn[Q], out[Q];
+#pragma GCC unroll 19
+          for (int q = 0; q < Q; ++q)
+            fn[q] = in[q][i];
+          const double F[3] = {force[0][i], force[1][i], force[2][i]};
+          const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
+#pragma GCC unroll 19
+          for (int q = 0; q < Q; ++q)
+            fout[q][i] = static_cast<Real>(out[q]);
+          bad |= out_of_range(res);
+        }
       }
       if (bad) {
         for (int i = 0; i < len; ++i) {
-          const double F[3] = {force[0][i], force[1][i], force[2][i]};
-          double fn[Q], out[Q];
+          const Arith F[3] = {force[0][i], force[1][i], force[2][i]};
+          Arith fn[Q], out[Q];
           for (int q = 0; q < Q; ++q)
             fn[q] = in[q][i];
-          const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
-          if (out_of_range(res))
+          bool out_of = false;
+          if constexpr (deviations)
+            out_of = out_of_range(
+                collide_deviation<float, even_ghosts_relaxed>(fn, F, l_float, rho0_float, out));
+          else
+            out_of = out_of_range(collide<even_ghosts_relaxed>(fn, F, l, out));
+          if (out_of)
             return record_bad(b0 + i, F);
         }
         return record_bad(b0, force[0]); // not reached: the block had a bad node
@@ -302,7 +473,16 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
       if (with_field && field_valid(n))
         for (int d = 0; d < 3; ++d)
           F[d] += g[3 * n + d];
-      const NodeResult res = collide<false>(fn, F, l, out);
+      // (single precision: the deviations collided in double; the noise
+      // goes to the stress and ghost modes, which the rest state lacks)
+      NodeResult res;
+      if constexpr (deviations) {
+        const NodeResultOf<double> dev =
+            collide_deviation<double, false>(fn, F, l_double, m_p.density, out);
+        res = {dev.rho, dev.u2};
+      } else {
+        res = collide<false>(fn, F, l, out);
+      }
       if (out_of_range(res))
         return record_bad(n, F);
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,

@@ -54,7 +54,8 @@ class LBFluid(ParameterObject):
                      check=(lambda s: s.upper() in _COLLISIONS, "one of 'MRT', 'MRT_ESPRESSO', 'TRT', 'BGK'")),
                _threads_param(),
                Param("single_precision", "bool", False,
-                     doc="store the populations as float (half the memory traffic)")]
+                     doc="store the populations as float deviations from the rest state at "
+                         "dens and collide them in float (half the memory traffic)")]
 
     def _validate(self):
         if self.kT > 0 and self.seed is None:

@@ -136,7 +136,7 @@ def _fluid_settings(system, fluid, report):
                           ok=mach <= MACH_LIMIT))
     single = bool(getattr(fluid, "single_precision", False))
     report.append(Setting("precision", "single" if single else "double", "",
-                          "round-off about 1e-6 of the speeds (float storage)" if single
+                          "round-off about 1e-6 of the speeds (float deviations from rest)" if single
                           else "round-off about 1e-15",
                           "" if single else "single_precision=True halves the lattice's memory "
                           "traffic where 1e-6 suffices"))
