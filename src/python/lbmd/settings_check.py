@@ -138,8 +138,9 @@ def _fluid_settings(system, fluid, report):
     report.append(Setting("precision", "single" if single else "double", "",
                           "round-off about 1e-6 of the speeds (float deviations from rest)" if single
                           else "round-off about 1e-15",
-                          "" if single else "single_precision=True halves the lattice's memory "
-                          "traffic where 1e-6 suffices"))
+                          "" if single else "single_precision=True updates the lattice 2.3x as "
+                          "fast (128^3, one core) with errors of 1e-6 to 1e-5 of the speeds "
+                          "(Poiseuille, Couette, coupling: doc/lb.md)"))
 
 
 def _cell_settings(system, fluid, gamma, report):
