@@ -4,10 +4,11 @@ a cell whose volume drifts warns (CellDriftWarning). Each test pushes a scene
 past one edge of the stable region and checks the named error.
 
 Causes (doc/engine.md, "When a run breaks"): lattice_nan, negative_density,
-mach, particle_nan, particle_jump, triangle_inverted, volume_collapsed,
-volume_exploded, membrane_crossing (and triangle_collapsed, cell_blown_up,
+mach, particle_nan, particle_jump, triangle_collapsed, triangle_inverted,
+volume_collapsed, volume_exploded, membrane_crossing (and cell_blown_up,
 bond_broken, wall_penetration, outside_lattice, named by the same mechanism,
-tested with their messages in test_oif_cell, test_constraints, test_lb_api).
+tested with their messages in test_oif_cell, test_constraints, test_lb_api;
+wall_penetration's attributes across ranks in test_mpi_errors).
 """
 import unittest
 import warnings
@@ -125,6 +126,17 @@ class Named(unittest.TestCase):
         self.assertGreater(e.value, 150.0)  # degrees turned
         s.cell_checks = False  # off: the run goes on (a comparison of drivers may need it)
         s.integrator.run(1)
+
+    def test_collapsed_triangle(self):
+        s, ct = cell_system()
+        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
+        i, a, b = np.asarray(ct.mesh.triangle_ids)[0]
+        x = cell.mesh.positions()
+        x[i] = x[a]  # an edge of zero length: its triangles have no area
+        cell.particles.pos = x
+        e = self.assert_named(lambda: s.integrator.run(1), "triangle_collapsed")
+        self.assertEqual(e.cell, cell.particles.mol_id[0])
+        self.assertEqual(e.value, 0.0)
 
     def test_volume_collapsed_and_exploded(self):
         for scale, cause in ((0.55, "volume_collapsed"), (1.7, "volume_exploded")):

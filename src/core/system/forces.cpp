@@ -466,8 +466,13 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   if (constraint_shape_version() != m_shape_version_of_forces)
     invalidate_forces(); // a constraint's shape changed (Union.add ...)
   auto& p = particles;
-  if (!reuse_forces && (!m_forces_valid || recalc_forces))
-    compute_forces();
+  if (!reuse_forces && (!m_forces_valid || recalc_forces)) {
+    try { // the forces of the state the run starts from: named as of this step
+      compute_forces();
+    } catch (SimulationInstability& e) {
+      throw e.at_step(step_count, time);
+    }
+  }
   // run_timings: the steps, however the call ends; not the force computation
   // a run may start with (stale forces: first run, changed parameters,
   // recalc_forces), which would inflate the time per step of short runs
@@ -651,12 +656,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
         moved = advance(std::integral_constant<int, 2>{});
     }
   } catch (SimulationInstability& e) {
-    if (e.step < 0) {
-      e.step = static_cast<long long>(step_count);
-      if (std::isnan(e.time))
-        e.time = time;
-    }
-    throw;
+    throw e.at_step(step_count, time);
   }
   mark_forces_valid();
 }

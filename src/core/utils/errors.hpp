@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -56,6 +57,15 @@ struct SimulationInstability : std::runtime_error {
   }
   SimulationInstability& at_time(double t) {
     time = t;
+    return *this;
+  }
+  /** Step and time where the thrower did not know them (step < 0). */
+  SimulationInstability& at_step(unsigned long long step_number, double t) {
+    if (step < 0) {
+      step = static_cast<long long>(step_number);
+      if (std::isnan(time))
+        time = t;
+    }
     return *this;
   }
   /** The same error with message m (the fields kept). */
