@@ -340,18 +340,22 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
   // (in double, also in single precision: it is what the report shows)
   constexpr bool deviations = std::is_same_v<Real, float>; // see lb_fluid.hpp
   const RelaxationOf<double> l_double(l);
+  // one node's collision in double, of full populations or (single
+  // precision) of their deviations from rest
+  auto collide_in_double = [&](const double* fn, const double* F, double* out) -> NodeResult {
+    if constexpr (deviations) {
+      const NodeResultOf<double> dev =
+          collide_deviation<double, false>(fn, F, l_double, m_p.density, out);
+      return {dev.rho, dev.u2};
+    } else {
+      return collide<false>(fn, F, l, out);
+    }
+  };
   auto record_bad = [&](std::size_t n, const auto* F_in) {
     double fn[Q], out[Q], F[3] = {double(F_in[0]), double(F_in[1]), double(F_in[2])};
     for (int q = 0; q < Q; ++q)
       fn[q] = f[read[q] + static_cast<std::ptrdiff_t>(n)];
-    NodeResult res;
-    if constexpr (deviations) {
-      const NodeResultOf<double> dev =
-          collide_deviation<double, false>(fn, F, l_double, m_p.density, out);
-      res = {dev.rho, dev.u2};
-    } else {
-      res = collide<false>(fn, F, l, out);
-    }
+    const NodeResult res = collide_in_double(fn, F, out);
     bad_node = {n, res.rho, std::sqrt(res.u2)};
     return true;
   };
@@ -475,14 +479,7 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
           F[d] += g[3 * n + d];
       // (single precision: the deviations collided in double; the noise
       // goes to the stress and ghost modes, which the rest state lacks)
-      NodeResult res;
-      if constexpr (deviations) {
-        const NodeResultOf<double> dev =
-            collide_deviation<double, false>(fn, F, l_double, m_p.density, out);
-        res = {dev.rho, dev.u2};
-      } else {
-        res = collide<false>(fn, F, l, out);
-      }
+      const NodeResult res = collide_in_double(fn, F, out);
       if (out_of_range(res))
         return record_bad(n, F);
       // fluctuating MRT (DSL eq. 66): noise on the stress and ghost modes,
