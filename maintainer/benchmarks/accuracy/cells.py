@@ -636,6 +636,12 @@ def _plt():
     return plt
 
 
+#: the contact advice of lbmd/settings_check.py, and rbc374's longest edge
+#: at the paper's size (0.85 um)
+CONTACT_A_MIN = 0.1
+RBC374_LONGEST_EDGE = 0.85
+
+
 def charts(results, outdir, dpi=90):
     """One PNG per study present in results; returns the paths written."""
     plt = _plt()
@@ -764,6 +770,15 @@ def charts(results, outdir, dpi=90):
                             xytext=(6, 4), textcoords="offset points")
                 if r["cells_crossed_max"] > 0 or r["outcome"] != "ran":
                     ax.scatter([r["haematocrit"]], [max(r["a"], 1e-5)], s=200, facecolors="none", edgecolors="r")
+            # the region system.check_settings() advises (lbmd/settings_check.py):
+            # reach longer than rbc374's longest edge and a >= CONTACT_A_MIN
+            if cut > RBC374_LONGEST_EDGE:
+                ax.axhspan(CONTACT_A_MIN, 3, color="tab:green", alpha=0.12, zorder=0,
+                           label=f"advised: a >= {CONTACT_A_MIN:g}, cutoff > edge")
+                ax.legend(fontsize=6, loc="lower right")
+            else:
+                ax.text(0.25, 2e-5, f"outside the advice:\ncutoff {cut:g} < longest edge "
+                        f"{RBC374_LONGEST_EDGE:g}", fontsize=7, ha="center", color="0.3")
             ax.set_yscale("log")
             ax.set_xlabel("haematocrit")
             ax.set_xlim(0, 0.5)

@@ -56,7 +56,10 @@ MEMBRANE_DT = ((374, 0.81), (1002, 0.10))
 PAPER_KB, PAPER_KAL = 0.02, 0.007
 #: gamma N dt / (rho S agrid): measured fluid blow-up from 1.4
 COUPLING_ADVISED, COUPLING_FAILED = 1.0, 1.4
-CONTACT_A_NONE = 1e-3  # the paper's a = 1e-4 acted like no contact at all
+#: membrane_collision's a from which cells stayed apart (with a reach longer
+#: than the mesh's edges, up to 2 nN per cell and haematocrit 0.42); the
+#: paper's a = 1e-4 acted like no contact at all
+CONTACT_A_MIN = 0.1
 
 
 class Setting:
@@ -223,11 +226,11 @@ def _cell_settings(system, fluid, gamma, report):
                     p = pair.membrane_collision.get_params()
                     reach = p["cutoff"] + p["offset"]
                     edge = max(float(np.max(ct.r0)) for ct, _ in types.values())
-                    weak = p["a"] < CONTACT_A_NONE
+                    weak = p["a"] < CONTACT_A_MIN
                     report.append(Setting(
                         f"contact between cell types {a} and {b}",
                         f"membrane_collision a {p['a']:g}, cutoff + offset {reach:g}",
-                        f"reach > longest mesh edge {edge:.3g}; a >= {CONTACT_A_NONE:g}",
+                        f"reach > longest mesh edge {edge:.3g}; a >= {CONTACT_A_MIN:g}",
                         "measured: cells kept apart up to haematocrit 0.42" if reach > edge and not weak
                         else "measured: cells cross each other (the engine stops the run with "
                         "membrane_crossing): a cutoff longer than the edges and a >= 0.1 held them",
