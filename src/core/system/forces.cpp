@@ -418,7 +418,7 @@ Energies System::compute_energies() {
 
 void System::report_fast_particle(double dt, std::uint64_t step) const {
   const double half_box = 0.5 * box.length().minCoeff();
-  const bool pairs = nonbonded.max_range() > 0.0;
+  const bool pairs = nonbonded.max_range() > 0.0 && cells.skin > 0.0;
   const double limit = pairs ? std::min(half_box, cells.skin) : half_box;
   // the particle that moved farthest in this step (fixed coordinates do not move)
   const auto& p = particles;
@@ -506,13 +506,14 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // A particle that moves half the box in one step has certainly blown up
   // (a stiff bond or membrane with too long a time step): stopped here,
   // long before its energy overflows, with its id and speed.
-  // With pair contacts, a step longer than the skin is one too: the pair
+  // With pair contacts (and a skin), a step longer than the skin is one too: the pair
   // lists are rebuilt at every such step, and a node moving a skin (0.4 um
   // by default, 4 m/s at a step of 0.1 us against the mm/s of cells in flow)
   // per step has left the physics well before.
   const double half_box2 = 0.25 * std::pow(box.length().minCoeff(), 2);
-  const double step_limit2 =
-      nonbonded.max_range() > 0.0 ? std::min(half_box2, cells.skin * cells.skin) : half_box2;
+  const double step_limit2 = nonbonded.max_range() > 0.0 && cells.skin > 0.0
+                                 ? std::min(half_box2, cells.skin * cells.skin)
+                                 : half_box2;
   // kicks half kicks (1 or 2), then the drift; returns the displacement test
   // (1: some particle moved beyond the skin or a re-sort is due anyway, 0:
   // none) or -1 when a position is not finite (prepare_step then names it)
