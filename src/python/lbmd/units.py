@@ -273,17 +273,9 @@ class UnitSystem:
         return f"UnitSystem(length={self.length!r}, time={self.time!r}, mass={self.mass!r})"
 
 
-# Continuum moduli of the OIF membrane (doc/model.md eqs. 3-7, energies in
-# doc/interactions.md) and their SI units.
+# The OIF membrane's continuum moduli (doc/model.md eqs. 3-7, energies in
+# doc/interactions.md).
 _SQRT3 = math.sqrt(3.0)
-_MODULUS_UNITS = {
-    "shear_modulus": "N/m",
-    "bending_modulus": "J",
-    "local_area_modulus": "N/m",
-    "global_area_modulus": "N/m",
-    "volume_modulus": "Pa",
-    "membrane_viscosity": "Pa s m",
-}
 # OIF coefficient, its unit in SI, and the factor c with  coefficient = c * modulus
 _OIF_OF_MODULUS = {
     "shear_modulus": ("ks", "N/m", 4.0 / _SQRT3),
