@@ -35,6 +35,7 @@ from . import shapes
 from . import constraints
 from . import lb
 from . import lbboundaries
+from . import units
 from . import system as _system_module
 from .system import CellDriftWarning, System
 
@@ -71,5 +72,5 @@ if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
 __all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
-           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries",
+           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "units",
            "rank", "size", "comm"]
