@@ -56,9 +56,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 from benchmark_csv import write_rows  # noqa: E402
 
-R_RBC = 3.91
+R_RBC = oif.stretching.RBC_RADIUS  # 3.91
 R_RBC_SURFACE = 8.7709 * R_RBC ** 2  # Evans-Fung surface, 134 um^2 (oif.md)
-PAPER = dict(ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
+PAPER = dict(oif.stretching.RBC_MODULI)  # ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9
 VISC, DENS = 1.5, 1.0
 # the cell's mass, kept on every mesh (node mass CELL_MASS / N): node mass 1
 # on rbc374 as in the paper's scenes
@@ -87,59 +87,19 @@ def extents(pos):
 # ---------------------------------------------------------------------------
 # stretch (Mills 2004)
 # ---------------------------------------------------------------------------
-def stretch_one(mesh, forces, patch_radius=1.0, chunk=500, tol=1e-5, max_chunks=60, damping=0.3, ramp=4):
-    """Equilibrium axial/transverse diameter at each force (nN, whole force
-    on each patch), the forces applied in turn, each ramped up over `ramp`
-    chunks from the previous one. No fluid: the cell only has to come to
-    rest, and the equilibrium depends on neither friction nor mass. Node
-    mass 1; Langevin friction (kT 0) near the critical damping of the
-    cell's slowest mode (about sqrt(k/(N m)), k of order the shear
-    modulus); membrane viscosity kvisc 1 damps the short-wave modes, without
-    which an underdamped fine mesh crumples under the point loads and the
-    run blows up. Converged when neither diameter changes by more than
-    tol x D over two successive chunks."""
-    n = n_nodes(mesh)
-    s = lbmd.System(box_l=[48.0, 32.0, 32.0])
-    s.time_step = 0.1
-    s.cell_system.skin = 0.4
-    ct = cell_type(s, mesh, kvisc=1.0)
-    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[24.0, 16.0, 16.0])
-    s.thermostat.set_langevin(kT=0.0, gamma=damping / np.sqrt(n), seed=1)
-    x = cell.particles.pos - [24.0, 16.0, 16.0]
-    right = np.linalg.norm(x - [R_RBC, 0, 0], axis=1) < patch_radius
-    left = np.linalg.norm(x + [R_RBC, 0, 0], axis=1) < patch_radius
-    parts = s.part.by_ids(np.asarray(cell.particles.id))
-    rows = []
-    steps = 0
+def stretch_one(mesh, forces, **options):
+    """oif.stretch_cell's rows (the equilibrium diameters at each force, nN
+    on each patch; the driver's docstring has the method) with the
+    benchmark's columns and the CPU time of the whole series."""
     t0 = cpu()
-    previous = 0.0
-    for force in forces:
-        prev, calm = None, 0
-        for i in range(max_chunks):
-            now = previous + (force - previous) * min(1.0, (i + 1) / ramp)
-            f = np.zeros((n, 3))
-            f[right, 0] = now / right.sum()
-            f[left, 0] = -now / left.sum()
-            parts.ext_force = f
-            s.integrator.run(chunk)
-            steps += chunk
-            e = extents(cell.particles.pos)
-            d = np.array([e[0], e[1]])
-            if i >= ramp and prev is not None and np.max(np.abs(d - prev)) < tol * d[0]:
-                calm += 1
-                if calm == 2:
-                    break
-            else:
-                calm = 0
-            prev = d
-        previous = force
-        rows.append({"study": "stretch", "mesh": mesh, "nodes": n, "patch_nodes": int(right.sum()),
-                     "force_nN": force, "axial_um": d[0], "transverse_um": d[1], "converged": calm == 2,
-                     "volume_rel": cell.volume() / ct.volume0, "surface_rel": cell.surface() / ct.surface0})
-        print(f"stretch {mesh} F {force}: {d[0]:.4f} {d[1]:.4f} ({calm == 2}) after {steps} steps", flush=True)
+    rows = oif.stretch_cell(mesh, forces, radius=R_RBC, moduli=PAPER, progress=lambda r: print(
+        f"stretch {mesh} F {r['force_nN']}: {r['axial_um']:.4f} {r['transverse_um']:.4f} ({r['converged']}) "
+        f"after {r['steps']} steps", flush=True), **options)
     cost = cpu() - t0
+    steps = rows[-1]["steps"]
     for r in rows:
-        r.update(cpu_s=cost, steps=steps, cpu_s_per_1000_steps=1000 * cost / steps)
+        r.update(study="stretch", mesh=mesh, nodes=n_nodes(mesh), cpu_s=cost, steps=steps,
+                 cpu_s_per_1000_steps=1000 * cost / steps)
     return rows
 
 
