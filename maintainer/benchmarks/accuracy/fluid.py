@@ -60,6 +60,7 @@ import lbmd
 import lbmd.lb
 import lbmd.lbboundaries
 import lbmd.shapes
+import lbmd.stokes
 
 COLLISIONS = ("MRT", "MRT_ESPRESSO", "TRT", "BGK")
 CS = 1.0 / math.sqrt(3.0)  # lattice sound speed
@@ -148,9 +149,8 @@ def poiseuille(collision, nodes_across, nu_lattice, precision="double", reynolds
 
 def sangani_acrivos_k(c):
     """Drag factor K(c) of a simple cubic array of spheres at volume fraction c
-    (Sangani & Acrivos 1982; its first four terms are Hasimoto's)."""
-    x = c ** (1.0 / 3.0)
-    return 1 - 1.7601 * x + x ** 3 - 1.5593 * x ** 6 + 3.9799 * x ** 8 - 3.0734 * x ** 10
+    (Sangani & Acrivos 1982; its first four terms are Hasimoto's): lbmd.stokes."""
+    return lbmd.stokes.periodic_drag_factor(c)
 
 
 def stokes(collision, radius_nodes, nu_lattice, precision="double", reynolds=RE_STOKES,
