@@ -5,27 +5,13 @@ this test nothing ran the samples, and a rule change once broke the
 flagship's --rare and --full modes unnoticed.)"""
 import csv
 import os
-import subprocess
 import sys
 import tempfile
 import unittest
 
 import numpy as np
 
-SOURCE = os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
-BUILD = os.environ.get("PYOIF_BUILD_DIR", os.path.join(SOURCE, "build"))
-
-
-def run_sample(name, *args, cwd):
-    """stdout of `pyoif samples/<name> args`; the test fails with the
-    sample's own output if it exits with an error."""
-    proc = subprocess.run([os.path.join(BUILD, "pyoif"), os.path.join(SOURCE, "samples", name), *args],
-                          cwd=cwd, capture_output=True, text=True, timeout=600,
-                          env=dict(os.environ, OMP_NUM_THREADS="1"))
-    if proc.returncode != 0:
-        raise AssertionError(f"{name} {' '.join(args)} exited with {proc.returncode}:\n"
-                             f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
-    return proc.stdout
+from testsuite_data import BUILD, run_sample
 
 
 def table_rows(stdout):

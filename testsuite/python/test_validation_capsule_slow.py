@@ -26,14 +26,13 @@ within 1 %, and the documented bias of the default coupling
 About 65 CPU s: hence _slow (ctest label slow)."""
 import csv
 import os
-import subprocess
 import sys
 import tempfile
 import unittest
 
-SOURCE = os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
-BUILD = os.environ.get("PYOIF_BUILD_DIR", os.path.join(SOURCE, "build"))
-SAMPLE = os.path.join(SOURCE, "samples", "validation", "capsule_shear.py")
+from testsuite_data import BUILD, SOURCE, run_sample
+
+SAMPLE = "validation/capsule_shear.py"  # under samples/
 TOLERANCE = 0.10  # relative, on the no-slip limit of D (the issue's 10 %)
 CAPILLARY_NUMBERS = (0.0125, 0.025, 0.05)
 
@@ -49,16 +48,11 @@ class CapsuleShear(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         with tempfile.TemporaryDirectory() as tmp:
-            proc = subprocess.run([os.path.join(BUILD, "pyoif"), SAMPLE, "--output", tmp, "--ca",
-                                   *map(str, CAPILLARY_NUMBERS)],
-                                  capture_output=True, text=True, timeout=900,
-                                  env=dict(os.environ, OMP_NUM_THREADS="1"))
-            if proc.returncode != 0:
-                raise AssertionError(f"capsule_shear.py exited with {proc.returncode}:\n{proc.stdout[-3000:]}\n"
-                                     f"{proc.stderr[-3000:]}")
+            stdout = run_sample(SAMPLE, "--output", tmp, "--ca", *map(str, CAPILLARY_NUMBERS), cwd=tmp,
+                                timeout=900)
             cls.png_size = os.path.getsize(os.path.join(tmp, "capsule_shear.png"))
             cls.rows = read_csv(os.path.join(tmp, "capsule_shear.csv"))
-        cls.stdout = proc.stdout
+        cls.stdout = stdout
         cls.runs = [r for r in cls.rows if r["kind"] == "run"]
         cls.limits = {float(r["Ca"]): r for r in cls.rows if r["kind"] == "no_slip_limit"}
 

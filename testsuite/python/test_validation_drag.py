@@ -31,15 +31,14 @@ The sample takes about 4 CPU s for these five runs."""
 import csv
 import math
 import os
-import subprocess
 import tempfile
 import unittest
 
 import lbmd.stokes
 
-SOURCE = os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
-BUILD = os.environ.get("PYOIF_BUILD_DIR", os.path.join(SOURCE, "build"))
-SAMPLE = os.path.join(SOURCE, "samples", "validation", "cell_drag.py")
+from testsuite_data import BUILD, run_sample
+
+SAMPLE = "validation/cell_drag.py"  # under samples/
 FACTORS = ("0.125", "0.5", "1", "2", "8")
 BALANCE = 2e-3
 SUGGESTED_DRAG = 0.20
@@ -53,17 +52,12 @@ class CellDrag(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         with tempfile.TemporaryDirectory() as tmp:
-            proc = subprocess.run([os.path.join(BUILD, "pyoif"), SAMPLE, "--factors", *FACTORS, "--radii",
-                                   "--agrids", "--boxes", "--output", tmp],
-                                  capture_output=True, text=True, timeout=600,
-                                  env=dict(os.environ, OMP_NUM_THREADS="1"))
-            if proc.returncode != 0:
-                raise AssertionError(f"cell_drag.py exited with {proc.returncode}:\n{proc.stdout[-3000:]}\n"
-                                     f"{proc.stderr[-3000:]}")
+            stdout = run_sample(SAMPLE, "--factors", *FACTORS, "--radii", "--agrids", "--boxes", "--output", tmp,
+                                cwd=tmp)
             cls.png_size = os.path.getsize(os.path.join(tmp, "cell_drag.png"))
             with open(os.path.join(tmp, "cell_drag.csv")) as f:
                 cls.rows = list(csv.DictReader(f))
-        cls.stdout = proc.stdout
+        cls.stdout = stdout
         cls.by_factor = {round(float(r["gamma_factor"]), 6): r for r in cls.rows}
 
     def test_outputs_and_steady_state(self):

@@ -19,16 +19,15 @@ At 0 pN both diameters equal the relaxed cell's within 1e-3 um.
 rbc374 takes about 5 CPU s, rbc642 about 9, rbc1002 about 13."""
 import csv
 import os
-import subprocess
 import tempfile
 import unittest
 
 import lbmd
 import oif
 
-SOURCE = os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
-BUILD = os.environ.get("PYOIF_BUILD_DIR", os.path.join(SOURCE, "build"))
-SAMPLE = os.path.join(SOURCE, "samples", "validation", "rbc_stretching.py")
+from testsuite_data import BUILD, SOURCE, run_sample
+
+SAMPLE = "validation/rbc_stretching.py"  # under samples/
 DATA = os.path.join(SOURCE, "samples", "validation", "data", "mills2004_stretching.csv")
 MARGIN = 0.1  # um, see the module docstring
 
@@ -51,15 +50,10 @@ def relaxed_diameters(mesh):
 class MillsStretching(unittest.TestCase):
     def run_mesh(self, mesh):
         with tempfile.TemporaryDirectory() as tmp:
-            proc = subprocess.run([os.path.join(BUILD, "pyoif"), SAMPLE, "--mesh", mesh, "--output", tmp],
-                                  capture_output=True, text=True, timeout=600,
-                                  env=dict(os.environ, OMP_NUM_THREADS="1"))
-            if proc.returncode != 0:
-                raise AssertionError(f"rbc_stretching.py exited with {proc.returncode}:\n{proc.stdout[-3000:]}\n"
-                                     f"{proc.stderr[-3000:]}")
+            stdout = run_sample(SAMPLE, "--mesh", mesh, "--output", tmp, cwd=tmp)
             self.assertTrue(os.path.getsize(os.path.join(tmp, f"rbc_stretching_{mesh}.png")) > 0)
             rows = read_csv(os.path.join(tmp, f"rbc_stretching_{mesh}.csv"))
-        self.assertIn("worst distance from the Mills range, axial", proc.stdout)
+        self.assertIn("worst distance from the Mills range, axial", stdout)
         data = {float(r["force_pN"]): {k: float(v) for k, v in r.items()} for r in read_csv(DATA)}
         self.assertEqual([float(r["force_pN"]) for r in rows], sorted(data))
         for r in rows:

@@ -1,7 +1,26 @@
 """Where the testsuite's own input files are: testsuite/data/ (ESPResSo's PyOIF
 meshes and their provenance in testsuite/data/meshes/README.md). CTest sets
-PYOIF_TEST_DATA; a test run by hand finds the folder beside this file."""
+PYOIF_TEST_DATA; a test run by hand finds the folder beside this file.
+Also where the sources and the build are (PYOIF_SOURCE_DIR, PYOIF_BUILD_DIR)
+and `run_sample`, which the tests of the samples share."""
 import os
+import subprocess
 
 TEST_DATA = os.environ.get("PYOIF_TEST_DATA", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data"))
 TEST_MESHES = os.path.join(TEST_DATA, "meshes")
+
+SOURCE = os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+BUILD = os.environ.get("PYOIF_BUILD_DIR", os.path.join(SOURCE, "build"))
+LAUNCHER = os.path.join(BUILD, "pyoif")
+
+
+def run_sample(name, *args, cwd, timeout=600):
+    """stdout of `pyoif samples/<name> args` on one thread; the test fails
+    with the sample's own output if it exits with an error."""
+    proc = subprocess.run([LAUNCHER, os.path.join(SOURCE, "samples", name), *args],
+                          cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    if proc.returncode != 0:
+        raise AssertionError(f"{name} {' '.join(args)} exited with {proc.returncode}:\n"
+                             f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    return proc.stdout
