@@ -84,6 +84,46 @@ class MpiLauncher(unittest.TestCase):
         comm.Barrier()
         self.assertTrue(os.path.exists(os.path.join(folder, "good.vtk")))
 
+    def test_cell_series_written_once(self):
+        """oif.CellSeries under MPI: every rank calls write, rank 0 writes the
+        .vtp and .pvd (whose content does not depend on the rank count), and a
+        refused step is refused on every rank."""
+        import os
+        import shutil
+        import tempfile
+        import xml.etree.ElementTree as ET
+
+        import oif
+        comm = MPI.COMM_WORLD
+        folder = comm.bcast(tempfile.mkdtemp() if comm.Get_rank() == 0 else None, root=0)
+        s = lbmd.System(box_l=[40.0, 30.0, 30.0])
+        s.time_step = 0.01
+        ct = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(3.0, 3.0, 3.0), ks=0.05)
+        cells = [oif.OifCell(cell_type=ct, particle_type=0, origin=[10, 15, 15]),
+                 oif.OifCell(cell_type=ct, particle_type=0, origin=[41, 15, 15])]
+        series = oif.CellSeries(os.path.join(folder, "cells.pvd"))
+        for k in range(2):
+            name = series.write(cells, 0.5 * k)
+        if comm.Get_rank() == 0:
+            os.mkdir(os.path.join(folder, "cells_000002.vtp"))
+        comm.Barrier()
+        with self.assertRaisesRegex(ValueError, "cells_000002.vtp"):
+            series.write(cells, 1.0)
+        pos = np.vstack([c.mesh.positions() for c in cells])
+        if comm.Get_rank() == 0:
+            import vtk
+            from vtk.util.numpy_support import vtk_to_numpy
+            reader = vtk.vtkXMLPolyDataReader()
+            reader.SetFileName(name)
+            reader.Update()
+            pts = vtk_to_numpy(reader.GetOutput().GetPoints().GetData())
+            pos[162:, 0] -= 40.0  # the folded image of the cell centred at x = 41
+            np.testing.assert_array_equal(pts, pos)
+            self.assertEqual(len(ET.parse(os.path.join(folder, "cells.pvd")).getroot().find("Collection")), 2)
+        comm.Barrier()
+        if comm.Get_rank() == 0:
+            shutil.rmtree(folder)
+
     def test_world_size(self):
         self.assertGreaterEqual(MPI.COMM_WORLD.Get_size(), 1)
 
