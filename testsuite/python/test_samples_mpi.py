@@ -14,6 +14,7 @@ import unittest
 import numpy as np
 
 import test_samples as serial  # the module, so that its tests do not run again here
+from testsuite_data import BUILD, LAUNCHER, SOURCE, run_sample
 
 MPIRUN = shutil.which("mpirun") or shutil.which("mpiexec")
 TIMEOUT = 300  # seconds; each run takes a few
@@ -25,8 +26,8 @@ def run_sample_mpi(name, *args, cwd):
     ranks included, is killed)."""
     env = dict({k: v for k, v in os.environ.items() if k != "PYOIF_ALL_RANKS"}, OMP_NUM_THREADS="1",
                OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    cmd = [MPIRUN, "--oversubscribe", "-np", "2", os.path.join(serial.BUILD, "pyoif"),
-           os.path.join(serial.SOURCE, "samples", name), *args]
+    cmd = [MPIRUN, "--oversubscribe", "-np", "2", LAUNCHER,
+           os.path.join(SOURCE, "samples", name), *args]
     proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True)
     try:
@@ -52,7 +53,7 @@ def files_under(folder):
     return sorted(os.path.relpath(os.path.join(d, f), folder) for d, _, files in os.walk(folder) for f in files)
 
 
-@unittest.skipUnless(os.path.isfile(os.path.join(serial.BUILD, "pyoif")),
+@unittest.skipUnless(os.path.isfile(os.path.join(BUILD, "pyoif")),
                      "no launcher: run through ctest (PYOIF_BUILD_DIR)")
 @unittest.skipUnless(MPIRUN, "no mpirun or mpiexec")
 class SamplesUnderMpirun(unittest.TestCase):
@@ -67,7 +68,7 @@ class SamplesUnderMpirun(unittest.TestCase):
     def check_same_as_serial(self, name, *args, csv_files=()):
         """Runs the sample serially and on two ranks, each in its own folder,
         and compares."""
-        out_serial = serial.run_sample(name, *args, cwd=self.serial_dir)
+        out_serial = run_sample(name, *args, cwd=self.serial_dir)
         out_mpi = run_sample_mpi(name, *args, cwd=self.mpi_dir)
         rows_serial, rows_mpi = serial.table_rows(out_serial), serial.table_rows(out_mpi)
         np.testing.assert_array_equal(rows_mpi, rows_serial, err_msg=f"{name}: the printed table differs")
