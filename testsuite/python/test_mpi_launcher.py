@@ -124,6 +124,44 @@ class MpiLauncher(unittest.TestCase):
         if comm.Get_rank() == 0:
             shutil.rmtree(folder)
 
+    def test_fluid_series_written_once(self):
+        """lbmd.vtk_output under MPI: every rank reads the nodes (collective),
+        rank 0 writes the .vti, .pvd and wall .vtp; the image holds the whole
+        lattice whatever the rank count."""
+        import os
+        import shutil
+        import tempfile
+
+        comm = MPI.COMM_WORLD
+        folder = comm.bcast(tempfile.mkdtemp() if comm.Get_rank() == 0 else None, root=0)
+        s = lbmd.System(box_l=[8.0, 4.0, 4.0], periodicity=[True, True, False])
+        s.time_step = 0.01
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=10.0, tau=0.01, ext_force_density=[0.1, 0, 0])
+        s.actors.add(lbf)
+        s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=1.0)))
+        s.integrator.run(4)
+        series = lbmd.vtk_output.FluidSeries(os.path.join(folder, "fluid.pvd"), lbf)
+        name = series.write(s.time)
+        wall = lbmd.vtk_output.write_wall_surface(os.path.join(folder, "walls.vtp"), lbf)
+        u = lbf[:, :, :].velocity
+        if comm.Get_rank() == 0:
+            import vtk
+            from vtk.util.numpy_support import vtk_to_numpy
+            reader = vtk.vtkXMLImageDataReader()
+            reader.SetFileName(name)
+            reader.Update()
+            self.assertEqual(reader.GetOutput().GetDimensions(), (8, 4, 4))
+            read = vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("velocity"))
+            np.testing.assert_array_equal(read.reshape(4, 4, 8, 3).transpose(2, 1, 0, 3), u)
+            poly = vtk.vtkXMLPolyDataReader()
+            poly.SetFileName(wall)
+            poly.Update()
+            self.assertGreater(poly.GetOutput().GetNumberOfCells(), 0)
+            self.assertEqual(sorted(os.listdir(folder)), ["fluid.pvd", "fluid_000000.vti", "walls.vtp"])
+        comm.Barrier()
+        if comm.Get_rank() == 0:
+            shutil.rmtree(folder)
+
     def test_world_size(self):
         self.assertGreaterEqual(MPI.COMM_WORLD.Get_size(), 1)
 

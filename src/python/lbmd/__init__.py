@@ -35,6 +35,7 @@ from . import shapes
 from . import constraints
 from . import lb
 from . import lbboundaries
+from . import vtk_output
 from . import units
 from . import system as _system_module
 from .system import CellDriftWarning, System
