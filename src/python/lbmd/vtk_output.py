@@ -29,6 +29,7 @@ FIELDS = {
 }
 
 _AXES = {"x": 0, "y": 1, "z": 2}
+_builtin_slice = slice  # FluidSeries' parameter 'slice' hides the builtin
 
 
 def _import_vtk(owner):
@@ -155,7 +156,7 @@ class FluidSeries:
         if len(set(names)) != len(names):
             raise ValueError(f"{owner}: parameter 'fields' names a field twice: {names!r}")
         shape = fluid.shape
-        self.key = (builtin_slice(None),) * 3
+        self.key = (_builtin_slice(None),) * 3
         self.slice = None
         if slice is not None:
             if isinstance(slice, str) or not hasattr(slice, "__len__") or len(slice) != 2:
@@ -172,8 +173,8 @@ class FluidSeries:
             if not 0 <= index < shape[axis]:
                 raise ValueError(f"{owner}: parameter 'slice': node index {index} is outside "
                                  f"[0, {shape[axis]}) on axis {'xyz'[axis]}")
-            key = [builtin_slice(None)] * 3
-            key[int(axis)] = builtin_slice(int(index), int(index) + 1)
+            key = [_builtin_slice(None)] * 3
+            key[int(axis)] = _builtin_slice(int(index), int(index) + 1)
             self.key = tuple(key)
             self.slice = (int(axis), int(index))
         self.pvd_path = path
@@ -225,8 +226,6 @@ class FluidSeries:
             raise
         return vti_path
 
-
-builtin_slice = slice
 
 
 def wall_surface(fluid, boundary=None):
