@@ -19,7 +19,8 @@ the paper's 40 RBCs, height 20, the rare cell and 200 cycles.
 
 Output in DIR: cells.csv (time, cell, type, x, y, z, surface, volume,
 diameter per cycle), branches.csv (which branch each cell entered), and with
---vtk the membranes and the geometry as VTK for ParaView. At the end the share
+--vtk the membranes (legacy VTK, every cycle) and the walls as the fluid
+sees them (walls.vtp, VTK XML) for ParaView. At the end the share
 of cells that entered each branch is printed (the paper's Fig 3 quantity).
 
 The corners that face the flow (the island's, and where the parent channel
@@ -33,7 +34,6 @@ floating-point operation order in the membrane forces moved it).
 import argparse
 import csv
 import os
-from types import SimpleNamespace
 
 import lbmd
 import oif
@@ -92,7 +92,7 @@ def block(x0, x1, y0, y1, rounded=()):
         else:
             parts.append(box(min(cx, cx + sx * r), max(cx, cx + sx * r), min(cy, cy + sy * r),
                              max(cy, cy + sy * r)))
-    return shapes.Union(shapes=parts), (x0, x1, y0, y1)
+    return shapes.Union(shapes=parts)
 
 
 island = (1.0 + w_low, L_Y - 1.0 - w_up)
@@ -101,23 +101,14 @@ blocks = [
     block(0.0, SPLIT, PARENT[1], L_Y, rounded=("lr",)),          # parent, above
     block(JOIN, L_X, 0.0, PARENT[0], rounded=("ul",)),           # outlet, below
     block(JOIN, L_X, PARENT[1], L_Y, rounded=("ll",)),           # outlet, above
-    (shapes.Rhomboid(corner=[SPLIT - 1.0, 0.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
-                     c=[0, 0, H_BOX]), None),                    # branch outer walls
-    (shapes.Rhomboid(corner=[SPLIT - 1.0, L_Y - 1.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
-                     c=[0, 0, H_BOX]), None),
+    shapes.Rhomboid(corner=[SPLIT - 1.0, 0.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
+                    c=[0, 0, H_BOX]),                            # branch outer walls
+    shapes.Rhomboid(corner=[SPLIT - 1.0, L_Y - 1.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
+                    c=[0, 0, H_BOX]),
     block(SPLIT, JOIN, island[0], island[1], rounded=("ll", "lr", "ul", "ur")),  # island
 ]
 boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(height + 1.0))]
-for k, (shape, extent) in enumerate(blocks):
-    boundaries.append(shape)
-    if args.vtk:  # ParaView outline: the block's bounding rhomboid
-        x0, x1, y0, y1 = extent if extent else (SPLIT - 1.0, JOIN + 1.0, 0.0, 1.0)
-        oif.output_vtk_rhomboid(SimpleNamespace(corner=[x0, y0, 0.0], a=[x1 - x0, 0, 0], b=[0, y1 - y0, 0],
-                                                c=[0, 0, H_BOX]), os.path.join(args.output, f"block_{k}.vtk"))
-if args.vtk:
-    for name, z in (("bottom", 0.0), ("top", height + 1.0)):
-        oif.output_vtk_rhomboid(SimpleNamespace(corner=[0, 0, z], a=[L_X, 0, 0], b=[0, L_Y, 0], c=[0, 0, 1.0]),
-                                os.path.join(args.output, f"wall_{name}.vtk"))
+boundaries += blocks
 
 # --- cells
 rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(3.91, 3.91, 3.91),
@@ -149,6 +140,8 @@ system.actors.add(lbf)
 for b in boundaries:
     system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
     system.constraints.add(shape=b, particle_type=10, penetrable=False)
+if args.vtk:  # for ParaView: the walls as the fluid sees them (rounded corners included)
+    lbmd.vtk_output.write_wall_surface(os.path.join(args.output, "walls.vtp"), lbf)
 system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
 for t in set(ptypes):
     # node-wall repulsion strong enough for cells driven onto the island's corners

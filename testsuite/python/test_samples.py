@@ -88,7 +88,19 @@ class Samples(unittest.TestCase):
         self.assertIn("total (200 steps)", out)  # the timing report
         # with the stiff rare cell (642 nodes, its own particle type)
         run_sample("cell_flow_in_bifurcation.py", "--cells", "2", "--rare", "--cycles", "1", "--steps", "20",
-                   "--output", "rare", cwd=self.tmp.name)
+                   "--output", "rare", "--vtk", cwd=self.tmp.name)
+        # --vtk: the membranes every cycle, and the walls as the fluid sees them
+        # (VTK XML, read back: a surface at the heights of the channel walls)
+        import vtk
+        reader = vtk.vtkXMLPolyDataReader()
+        reader.SetFileName(os.path.join(self.tmp.name, "rare", "walls.vtp"))
+        reader.Update()
+        walls = reader.GetOutput()
+        self.assertGreater(walls.GetNumberOfPolys(), 1000)
+        z_low, z_high = walls.GetBounds()[4:6]
+        self.assertEqual(z_low, 1.0)  # halfway between the solid node at 0.5 and the fluid node at 1.5
+        self.assertEqual(sorted(vtk_point_count(os.path.join(self.tmp.name, "rare", f"cell{k}_1.vtk"))
+                                for k in range(3)), [374, 374, 642])  # two RBCs and the rare cell
         with open(os.path.join(self.tmp.name, "rare", "cells.csv")) as f:
             table = list(csv.DictReader(f))
         self.assertEqual(len(table), 2 * 3)
