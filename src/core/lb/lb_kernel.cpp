@@ -413,35 +413,28 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
       for (int q = 0; q < Q; ++q)
         in[q] = f + read[q] + static_cast<std::ptrdiff_t>(b0);
       int bad = 0;
-      if constexpr (deviations) {
+      // one node's collision in the arithmetic of the storage (float
+      // deviations from rest, or double populations); true when out of range
+      auto collide_node = [&](const Arith* fn, const Arith* F, Arith* out)
+          __attribute__((always_inline)) {
+        if constexpr (deviations)
+          return out_of_range(
+              collide_deviation<float, even_ghosts_relaxed>(fn, F, l_float, rho0_float, out));
+        else
+          return out_of_range(collide<even_ghosts_relaxed>(fn, F, l, out));
+      };
 #pragma GCC ivdep
-        for (int i = 0; i < len; ++i) {
-          float gn[Q], out[Q];
+      for (int i = 0; i < len; ++i) {
+        Arith fn[Q], out[Q];
 #pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            gn[q] = in[q][i];
-          const float F[3] = {force[0][i], force[1][i], force[2][i]};
-          const NodeResultOf<float> res =
-              collide_deviation<float, even_ghosts_relaxed>(gn, F, l_float, rho0_float, out);
+        for (int q = 0; q < Q; ++q)
+          fn[q] = in[q][i];
+        const Arith F[3] = {force[0][i], force[1][i], force[2][i]};
+        const bool out_of = collide_node(fn, F, out);
 #pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            fout[q][i] = out[q];
-          bad |= out_of_range(res);
-        }
-      } else {
-#pragma GCC ivdep
-        for (int i = 0; i < len; ++i) {
-          double fn[Q], out[Q];
-#pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            fn[q] = in[q][i];
-          const double F[3] = {force[0][i], force[1][i], force[2][i]};
-          const NodeResult res = collide<even_ghosts_relaxed>(fn, F, l, out);
-#pragma GCC unroll 19
-          for (int q = 0; q < Q; ++q)
-            fout[q][i] = static_cast<Real>(out[q]);
-          bad |= out_of_range(res);
-        }
+        for (int q = 0; q < Q; ++q)
+          fout[q][i] = static_cast<Real>(out[q]);
+        bad |= out_of;
       }
       if (bad) {
         for (int i = 0; i < len; ++i) {
@@ -449,13 +442,7 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
           Arith fn[Q], out[Q];
           for (int q = 0; q < Q; ++q)
             fn[q] = in[q][i];
-          bool out_of = false;
-          if constexpr (deviations)
-            out_of = out_of_range(
-                collide_deviation<float, even_ghosts_relaxed>(fn, F, l_float, rho0_float, out));
-          else
-            out_of = out_of_range(collide<even_ghosts_relaxed>(fn, F, l, out));
-          if (out_of)
+          if (collide_node(fn, F, out))
             return record_bad(b0 + i, F);
         }
         return record_bad(b0, force[0]); // not reached: the block had a bad node

@@ -13,14 +13,11 @@ depend on the rank count. Each file is written under a temporary name in its
 folder and renamed over the final name: a crash never leaves a half-written
 ``.vtp`` or ``.pvd``, and ParaView can open the ``.pvd`` at any time of a run.
 """
-import math
-import numbers
-import os
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from . import vtk as _vtk
+from lbmd import vtk_output
+
 
 #: point-data arrays CellSeries can write, with what they hold
 POINT_DATA = {
@@ -28,15 +25,6 @@ POINT_DATA = {
     "force": "total particle forces f of the last step (N x 3)",
     "normal": "outward unit node normals of the current shape (N x 3, area-weighted over the adjacent triangles)",
 }
-
-
-def _import_vtk():
-    try:
-        import vtk
-        from vtk.util import numpy_support
-    except ImportError as e:  # pragma: no cover - python3-vtk9 is a dependency
-        raise ImportError(f"oif.CellSeries needs the VTK Python bindings (Debian package python3-vtk9): {e}") from None
-    return vtk, numpy_support
 
 
 def _outward_node_normals(pos, triangles):
@@ -53,7 +41,7 @@ def _outward_node_normals(pos, triangles):
     return acc / length[:, None]
 
 
-class CellSeries:
+class CellSeries(vtk_output.TimeSeries):
     """Time series of OIF cells for ParaView (VTK XML PolyData + collection).
 
     ``CellSeries(path, point_data=("velocity", "force", "normal"), folded=True)``
@@ -82,38 +70,11 @@ class CellSeries:
 
     def __init__(self, path=None, point_data=("velocity", "force", "normal"), folded=True):
         owner = "CellSeries"
-        if path is None:
-            raise TypeError(f"{owner}: missing required parameter 'path' (the .pvd file, e.g. 'out/cells.pvd')")
-        if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
-            raise TypeError(f"{owner}: parameter 'path' must be a file name string, got {type(path).__name__}")
-        path = os.fspath(path)
-        if not isinstance(path, str) or not path or path.endswith(("/", os.sep)):
-            raise ValueError(f"{owner}: parameter 'path' must name a .pvd file (e.g. 'out/cells.pvd'), got {path!r}")
-        if not path.endswith(".pvd"):
-            path += ".pvd"
-        if isinstance(point_data, str) or point_data is None:
-            point_data = () if point_data is None else (point_data,)
-        try:
-            names = list(point_data)
-        except TypeError:
-            raise TypeError(f"{owner}: parameter 'point_data' must be a sequence of names out of "
-                            f"{', '.join(POINT_DATA)}, got {point_data!r}") from None
-        bad = [n for n in names if not isinstance(n, str) or n not in POINT_DATA]
-        if bad:
-            raise ValueError(f"{owner}: parameter 'point_data' has unknown name(s) {bad!r}; accepted names: "
-                             f"{', '.join(POINT_DATA)}")
-        if len(set(names)) != len(names):
-            raise ValueError(f"{owner}: parameter 'point_data' names an array twice: {names!r}")
+        self._start_series(owner, path, "cells")
+        self.point_data = vtk_output.check_names(owner, "point_data", point_data, POINT_DATA)
         if not isinstance(folded, (bool, np.bool_)):
             raise TypeError(f"{owner}: parameter 'folded' must be True or False, got {folded!r}")
-        self.pvd_path = path
-        self.point_data = tuple(names)
         self.folded = bool(folded)
-        stem = os.path.basename(path)[:-len(".pvd")] or "cells"
-        self._folder = os.path.dirname(path)
-        self._stem = stem
-        self.steps = []  # (time, file name relative to the .pvd's folder)
-        self._vtk, self._numpy_support = _import_vtk()
 
     # -- data ---------------------------------------------------------------------
     def _cells(self, cells):
@@ -159,7 +120,7 @@ class CellSeries:
                 {name: np.vstack(a) for name, a in arrays.items()})
 
     def _polydata(self, points, triangles, tri_cell_ids, arrays):
-        vtk, ns = self._vtk, self._numpy_support
+        vtk, ns = self._vtk, self._ns
         poly = vtk.vtkPolyData()
         vtk_points = vtk.vtkPoints()
         vtk_points.SetData(ns.numpy_to_vtk(np.ascontiguousarray(points, dtype=np.float64), deep=1))
@@ -180,37 +141,6 @@ class CellSeries:
         return poly
 
     # -- files --------------------------------------------------------------------
-    def _write_vtp(self, poly, path):
-        vtk = self._vtk
-        real = _vtk.output_path(path, "CellSeries")
-        tmp = real + ".tmp"
-        try:
-            writer = vtk.vtkXMLPolyDataWriter()
-            writer.SetFileName(tmp)
-            writer.SetInputData(poly)
-            writer.SetDataModeToAppended()  # binary blocks after the XML header
-            writer.SetCompressorTypeToZLib()
-            writer.SetHeaderTypeToUInt64()  # blocks over 4 GB stay readable
-            if writer.Write() != 1:
-                raise OSError(f"vtkXMLPolyDataWriter failed (error code {writer.GetErrorCode()})")
-            os.replace(tmp, real)
-        except OSError as e:
-            raise OSError(f"CellSeries: cannot write '{path}': {e.strerror or e}") from None
-        finally:
-            if os.path.lexists(tmp) and os.path.isfile(tmp):
-                try:
-                    os.remove(tmp)
-                except OSError:  # pragma: no cover - the original error is the one to report
-                    pass
-
-    def collection_text(self):
-        """The ``.pvd`` XML listing every step written so far."""
-        rows = "".join(f'    <DataSet timestep={quoteattr(repr(t))} group="" part="0" file={quoteattr(f)}/>\n'
-                       for t, f in self.steps)
-        return ('<?xml version="1.0"?>\n'
-                '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-                f"  <Collection>\n{rows}  </Collection>\n</VTKFile>\n")
-
     def write(self, cells=None, time=None):
         """Write the cells at `time` as the next step and rewrite the
         ``.pvd``; every rank must call it under MPI. Returns the step's
@@ -218,21 +148,6 @@ class CellSeries:
         if cells is None:
             raise TypeError("CellSeries.write: missing required parameter 'cells'")
         cells = self._cells(cells)
-        if (time is None or isinstance(time, (bool, np.bool_)) or not isinstance(time, numbers.Real)
-                or not math.isfinite(float(time))):
-            raise TypeError(f"CellSeries.write: parameter 'time' must be a finite number, got {time!r}")
-        time = float(time)
-        if self.steps and not time > self.steps[-1][0]:
-            raise ValueError(f"CellSeries.write: parameter 'time' must grow from step to step: got {time!r} "
-                             f"after {self.steps[-1][0]!r}")
+        time = self._step_time(time)
         data = self._gather(cells)  # collective: every rank takes part
-        name = f"{self._stem}_{len(self.steps):06d}.vtp"
-        vtp_path = os.path.join(self._folder, name)
-        _vtk.on_writer(lambda: self._write_vtp(self._polydata(*data), vtp_path))
-        self.steps.append((time, name))
-        try:
-            _vtk.write_text(self.pvd_path, self.collection_text(), "CellSeries")
-        except BaseException:
-            self.steps.pop()  # the .pvd on disk still lists the earlier steps only
-            raise
-        return vtp_path
+        return self._write_step(time, ".vtp", self._vtk.vtkXMLPolyDataWriter, lambda: self._polydata(*data))

@@ -73,6 +73,26 @@ def output_path(path, owner="output"):
     return real
 
 
+def replace_atomically(path, owner, write_to):
+    """write_to(temporary name) in the folder of path, then renamed over the
+    target (readers never see a half-written file); the temporary file is
+    removed on any failure, and the error names owner and path. On the
+    writing rank only (call it inside on_writer)."""
+    real = output_path(path, owner)
+    tmp = real + ".tmp"
+    try:
+        write_to(tmp)
+        os.replace(tmp, real)
+    except OSError as e:
+        raise OSError(f"{owner}: cannot write '{path}': {e.strerror or e}") from None
+    finally:
+        if os.path.lexists(tmp) and os.path.isfile(tmp):
+            try:
+                os.remove(tmp)
+            except OSError:  # pragma: no cover - the original error is the one to report
+                pass
+
+
 def write_text(path, text, owner="output"):
     """Write text to path through a temporary file in the same folder, renamed
     over the target at the end (readers never see a half-written file); the
@@ -81,21 +101,9 @@ def write_text(path, text, owner="output"):
     others (on_writer): a check that came out differently on another rank
     (a node-local folder) cannot make one rank raise alone."""
 
-    def write():
-        real = output_path(path, owner)
-        tmp = real + ".tmp"
-        try:
-            with open(tmp, "w") as f:
-                f.write(text)
-            os.replace(tmp, real)
-        except OSError as e:
-            raise OSError(f"{owner}: cannot write '{path}': {e.strerror or e}") from None
-        finally:
-            if os.path.lexists(tmp) and os.path.isfile(tmp):
-                try:
-                    os.remove(tmp)
-                except OSError:  # pragma: no cover - the original error is the one to report
-                    pass
+    def write_to(tmp):
+        with open(tmp, "w") as f:
+            f.write(text)
 
-    on_writer(write)
+    on_writer(lambda: replace_atomically(path, owner, write_to))
 

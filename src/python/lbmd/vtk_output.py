@@ -32,7 +32,7 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 _builtin_slice = slice  # FluidSeries' parameter 'slice' hides the builtin
 
 
-def _import_vtk(owner):
+def import_vtk(owner):
     try:
         import vtk
         from vtk.util import numpy_support
@@ -41,14 +41,16 @@ def _import_vtk(owner):
     return vtk, numpy_support
 
 
-def _check_path(owner, path, suffix):
+def check_path(owner, path, suffix, example="out/fluid"):
+    """path as a string ending in suffix (appended when missing); TypeError or
+    ValueError naming owner's parameter 'path' otherwise."""
     if path is None:
         raise TypeError(f"{owner}: missing required parameter 'path' (a {suffix} file name)")
     if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
         raise TypeError(f"{owner}: parameter 'path' must be a file name string, got {type(path).__name__}")
     path = os.fspath(path)
     if not isinstance(path, str) or not path or path.endswith(("/", os.sep)) or "\0" in path:
-        raise ValueError(f"{owner}: parameter 'path' must name a {suffix} file (e.g. 'out/fluid{suffix}'), "
+        raise ValueError(f"{owner}: parameter 'path' must name a {suffix} file (e.g. '{example}{suffix}'), "
                          f"got {path!r}")
     return path if path.endswith(suffix) else path + suffix
 
@@ -62,12 +64,12 @@ def _check_fluid(owner, fluid):
     return fluid
 
 
-def _write_xml(owner, writer, data, path):
-    """Write a VTK data set with an XML writer (appended binary, zlib,
-    64-bit headers) under a temporary name, renamed over path."""
-    real = file_output.output_path(path, owner)
-    tmp = real + ".tmp"
-    try:
+def write_xml(owner, writer, data, path):
+    """Write a VTK data set with an XML writer (appended binary blocks after
+    the XML header, zlib, 64-bit headers so blocks over 4 GB stay readable)
+    under a temporary name, renamed over path (writing rank only)."""
+
+    def write_to(tmp):
         writer.SetFileName(tmp)
         writer.SetInputData(data)
         writer.SetDataModeToAppended()
@@ -75,15 +77,8 @@ def _write_xml(owner, writer, data, path):
         writer.SetHeaderTypeToUInt64()
         if writer.Write() != 1:
             raise OSError(f"{type(writer).__name__} failed (error code {writer.GetErrorCode()})")
-        os.replace(tmp, real)
-    except OSError as e:
-        raise OSError(f"{owner}: cannot write '{path}': {e.strerror or e}") from None
-    finally:
-        if os.path.lexists(tmp) and os.path.isfile(tmp):
-            try:
-                os.remove(tmp)
-            except OSError:  # pragma: no cover - the original error is the one to report
-                pass
+
+    file_output.replace_atomically(path, owner, write_to)
 
 
 def collection_text(steps):
@@ -93,6 +88,70 @@ def collection_text(steps):
     return ('<?xml version="1.0"?>\n'
             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
             f"  <Collection>\n{rows}  </Collection>\n</VTKFile>\n")
+
+
+def check_names(owner, parameter, value, accepted, allow_empty=True):
+    """value (a name, a sequence of names or None) as a tuple of names out of
+    accepted, each once; errors name owner's parameter and the accepted names."""
+    if isinstance(value, str) or value is None:
+        value = () if value is None else (value,)
+    try:
+        names = list(value)
+    except TypeError:
+        raise TypeError(f"{owner}: parameter '{parameter}' must be a sequence of names out of "
+                        f"{', '.join(accepted)}, got {value!r}") from None
+    bad = [n for n in names if not isinstance(n, str) or n not in accepted]
+    if bad:
+        raise ValueError(f"{owner}: parameter '{parameter}' has unknown name(s) {bad!r}; accepted names: "
+                         f"{', '.join(accepted)}")
+    if not names and not allow_empty:
+        raise ValueError(f"{owner}: parameter '{parameter}' is empty; name at least one of {', '.join(accepted)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"{owner}: parameter '{parameter}' names an entry twice: {names!r}")
+    return tuple(names)
+
+
+class TimeSeries:
+    """A ``.pvd`` collection of VTK XML files, one per step, written beside
+    it as ``<stem>_<k>.<suffix>`` (six digits, from 0). The ``.pvd`` is
+    rewritten (write then rename) after each step, so it only ever lists
+    complete steps and ParaView can open it during a run. Under MPI every
+    rank calls ``write`` (the data are gathered collectively), rank 0 writes.
+    Subclasses: FluidSeries here, oif.CellSeries."""
+
+    def _start_series(self, owner, path, default_stem):
+        self._owner = owner
+        self.pvd_path = check_path(owner, path, ".pvd", example=f"out/{default_stem}")
+        self._folder = os.path.dirname(self.pvd_path)
+        self._stem = os.path.basename(self.pvd_path)[:-len(".pvd")] or default_stem
+        self.steps = []  # (time, file name relative to the .pvd's folder)
+        self._vtk, self._ns = import_vtk(owner)
+
+    def _step_time(self, time):
+        """time as a float, finite and later than the last step's."""
+        owner = f"{self._owner}.write"
+        if (time is None or isinstance(time, (bool, np.bool_)) or not isinstance(time, numbers.Real)
+                or not math.isfinite(float(time))):
+            raise TypeError(f"{owner}: parameter 'time' must be a finite number, got {time!r}")
+        time = float(time)
+        if self.steps and not time > self.steps[-1][0]:
+            raise ValueError(f"{owner}: parameter 'time' must grow from step to step: got {time!r} "
+                             f"after {self.steps[-1][0]!r}")
+        return time
+
+    def _write_step(self, time, suffix, writer, make_data):
+        """The next step's file (make_data() on the writing rank, written by
+        writer, a vtkXML*Writer), then the .pvd; returns the step's path."""
+        name = f"{self._stem}_{len(self.steps):06d}{suffix}"
+        path = os.path.join(self._folder, name)
+        file_output.on_writer(lambda: write_xml(self._owner, writer(), make_data(), path))
+        self.steps.append((time, name))
+        try:
+            file_output.write_text(self.pvd_path, collection_text(self.steps), self._owner)
+        except BaseException:
+            self.steps.pop()  # the .pvd on disk still lists the earlier steps only
+            raise
+        return path
 
 
 def _point_array(ns, values, name):
@@ -107,7 +166,7 @@ def _point_array(ns, values, name):
     return array
 
 
-class FluidSeries:
+class FluidSeries(TimeSeries):
     """Time series of the fluid's nodes for ParaView (VTK XML ImageData).
 
     ``FluidSeries(path, fluid, fields=("velocity", "density"), slice=None)``
@@ -136,25 +195,11 @@ class FluidSeries:
 
     def __init__(self, path=None, fluid=None, fields=("velocity", "density"), slice=None):
         owner = "FluidSeries"
-        path = _check_path(owner, path, ".pvd")
+        self._start_series(owner, path, "fluid")
         if fluid is None:
             raise TypeError(f"{owner}: missing required parameter 'fluid' (an active lbmd.lb.LBFluid)")
         self.fluid = _check_fluid(owner, fluid)
-        if isinstance(fields, str) or fields is None:
-            fields = () if fields is None else (fields,)
-        try:
-            names = list(fields)
-        except TypeError:
-            raise TypeError(f"{owner}: parameter 'fields' must be a sequence of names out of "
-                            f"{', '.join(FIELDS)}, got {fields!r}") from None
-        bad = [n for n in names if not isinstance(n, str) or n not in FIELDS]
-        if bad:
-            raise ValueError(f"{owner}: parameter 'fields' has unknown name(s) {bad!r}; accepted names: "
-                             f"{', '.join(FIELDS)}")
-        if not names:
-            raise ValueError(f"{owner}: parameter 'fields' is empty; name at least one of {', '.join(FIELDS)}")
-        if len(set(names)) != len(names):
-            raise ValueError(f"{owner}: parameter 'fields' names a field twice: {names!r}")
+        self.fields = check_names(owner, "fields", fields, FIELDS, allow_empty=False)
         shape = fluid.shape
         self.key = (_builtin_slice(None),) * 3
         self.slice = None
@@ -177,12 +222,6 @@ class FluidSeries:
             key[int(axis)] = _builtin_slice(int(index), int(index) + 1)
             self.key = tuple(key)
             self.slice = (int(axis), int(index))
-        self.pvd_path = path
-        self.fields = tuple(names)
-        self._folder = os.path.dirname(path)
-        self._stem = os.path.basename(path)[:-len(".pvd")] or "fluid"
-        self.steps = []  # (time, file name relative to the .pvd's folder)
-        self._vtk, self._ns = _import_vtk(owner)
 
     def _image(self, arrays):
         vtk = self._vtk
@@ -200,13 +239,7 @@ class FluidSeries:
     def write(self, time=None):
         """Write the fluid at `time` as the next step and rewrite the
         ``.pvd``; collective under MPI. Returns the step's ``.vti`` name."""
-        if (time is None or isinstance(time, (bool, np.bool_)) or not isinstance(time, numbers.Real)
-                or not math.isfinite(float(time))):
-            raise TypeError(f"FluidSeries.write: parameter 'time' must be a finite number, got {time!r}")
-        time = float(time)
-        if self.steps and not time > self.steps[-1][0]:
-            raise ValueError(f"FluidSeries.write: parameter 'time' must grow from step to step: got {time!r} "
-                             f"after {self.steps[-1][0]!r}")
+        time = self._step_time(time)
         _check_fluid("FluidSeries.write", self.fluid)
         nodes = self.fluid[self.key]
         arrays = {}
@@ -214,17 +247,7 @@ class FluidSeries:
             values = getattr(nodes, name)
             arrays[name] = (np.asarray(values, dtype=np.int32) if name == "boundary"
                             else np.asarray(values, dtype=np.float64))
-        name = f"{self._stem}_{len(self.steps):06d}.vti"
-        vti_path = os.path.join(self._folder, name)
-        file_output.on_writer(lambda: _write_xml("FluidSeries", self._vtk.vtkXMLImageDataWriter(),
-                                                 self._image(arrays), vti_path))
-        self.steps.append((time, name))
-        try:
-            file_output.write_text(self.pvd_path, collection_text(self.steps), "FluidSeries")
-        except BaseException:
-            self.steps.pop()  # the .pvd on disk still lists the earlier steps only
-            raise
-        return vti_path
+        return self._write_step(time, ".vti", self._vtk.vtkXMLImageDataWriter, lambda: self._image(arrays))
 
 
 
@@ -235,7 +258,7 @@ def wall_surface(fluid, boundary=None):
     collective under MPI)."""
     owner = "write_wall_surface"
     _check_fluid(owner, fluid)
-    vtk, ns = _import_vtk(owner)
+    vtk, ns = import_vtk(owner)
     if boundary is None:
         boundary = fluid[:, :, :].boundary
     solid = (np.asarray(boundary) > 0).astype(np.float64)
@@ -314,7 +337,7 @@ def write_wall_surface(path=None, fluid=None):
     Collective under MPI; rank 0 writes. Walls do not move: write once.
     """
     owner = "write_wall_surface"
-    path = _check_path(owner, path, ".vtp")
+    path = check_path(owner, path, ".vtp")
     if fluid is None:
         raise TypeError(f"{owner}: missing required parameter 'fluid' (an active lbmd.lb.LBFluid)")
     _check_fluid(owner, fluid)
@@ -322,6 +345,6 @@ def write_wall_surface(path=None, fluid=None):
     if not np.any(solid > 0):
         raise ValueError(f"{owner}: the fluid has no boundary nodes (add an LBBoundary to "
                          f"system.lbboundaries first); there is no wall surface to write")
-    vtk, _ = _import_vtk(owner)
-    file_output.on_writer(lambda: _write_xml(owner, vtk.vtkXMLPolyDataWriter(), wall_surface(fluid, solid), path))
+    vtk, _ = import_vtk(owner)
+    file_output.on_writer(lambda: write_xml(owner, vtk.vtkXMLPolyDataWriter(), wall_surface(fluid, solid), path))
     return path
