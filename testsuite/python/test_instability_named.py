@@ -40,6 +40,17 @@ def cell_system(kv=3.0, mesh="sphere162"):
     return s, ct
 
 
+def one_cell(kv=3.0):
+    """A system with one cell in the middle of the box."""
+    s, ct = cell_system(kv=kv)
+    return s, ct, oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
+
+
+def first_triangle(ct, cell):
+    """Node ids (i, a, b) of the mesh's first triangle and the positions."""
+    return (*np.asarray(ct.mesh.triangle_ids)[0], cell.mesh.positions())
+
+
 class Named(unittest.TestCase):
 
     def assert_named(self, run, cause):
@@ -116,12 +127,10 @@ class Named(unittest.TestCase):
 
     # --- cells ---------------------------------------------------------------
     def test_inverted_triangle(self):
-        s, ct = cell_system()
-        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
+        s, ct, cell = one_cell()
         # a node moved across the opposite edge of one of its triangles: that
         # triangle turns over onto its neighbour across the edge
-        i, a, b = np.asarray(ct.mesh.triangle_ids)[0]
-        x = cell.mesh.positions()
+        i, a, b, x = first_triangle(ct, cell)
         x[i] = x[a] + x[b] - x[i]
         cell.particles.pos = x
         e = self.assert_named(lambda: s.integrator.run(1), "triangle_inverted")
@@ -131,10 +140,8 @@ class Named(unittest.TestCase):
         s.integrator.run(1)
 
     def test_collapsed_triangle(self):
-        s, ct = cell_system()
-        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
-        i, a, b = np.asarray(ct.mesh.triangle_ids)[0]
-        x = cell.mesh.positions()
+        s, ct, cell = one_cell()
+        i, a, b, x = first_triangle(ct, cell)
         x[i] = x[a]  # an edge of zero length: its triangles have no area
         cell.particles.pos = x
         e = self.assert_named(lambda: s.integrator.run(1), "triangle_collapsed")
@@ -143,8 +150,7 @@ class Named(unittest.TestCase):
 
     def test_volume_collapsed_and_exploded(self):
         for scale, cause in ((0.55, "volume_collapsed"), (1.7, "volume_exploded")):
-            s, ct = cell_system()
-            cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
+            s, ct, cell = one_cell()
             x = cell.mesh.positions()
             c = x.mean(axis=0)
             cell.particles.pos = c + scale * (x - c)
@@ -154,9 +160,8 @@ class Named(unittest.TestCase):
             self.assertEqual(e.cell, cell.particles.mol_id[0])
 
     def test_volume_drift_warns_once(self):
-        s, ct = cell_system(kv=0.0)  # kag holds the surface, nothing holds the volume
+        s, ct, cell = one_cell(kv=0.0)  # kag holds the surface, nothing holds the volume
         s.cell_checks = True
-        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[20.0, 15.0, 15.0])
         x = cell.mesh.positions()
         c = x.mean(axis=0)
         cell.particles.pos = c + 0.97 * (x - c)  # surface 0.941 of the relaxed one
@@ -169,9 +174,8 @@ class Named(unittest.TestCase):
         self.assertIn(f"mol_id {cell.particles.mol_id[0]}", str(drift[0].message))
         self.assertIn("surface", str(drift[0].message))
         # a looser tolerance: quiet
-        s2, ct2 = cell_system(kv=0.0)
+        s2, _, cell2 = one_cell(kv=0.0)
         s2.cell_drift_tolerance = 0.1
-        cell2 = oif.OifCell(cell_type=ct2, particle_type=0, origin=[20.0, 15.0, 15.0])
         x = cell2.mesh.positions()
         cell2.particles.pos = x.mean(axis=0) + 0.97 * (x - x.mean(axis=0))
         with warnings.catch_warnings(record=True) as caught:
