@@ -28,6 +28,11 @@ maintainer/benchmarks/accuracy_vs_cost.py) or a stated estimate:
   the node count; for kb or kal raised above those, dt <= 0.05 k_paper / k
   held at every point measured; ks hardly matters. The mass enters as
   sqrt(m) (omega^2 = k / m; an estimate beyond the measured m = 1).
+  Coupled to the fluid (suggest_LBgamma's friction, gamma dt / m 0.15),
+  the friction damps the membrane's fastest modes: rbc374 and sphere642
+  with all five moduli raised together held 10^4 steps at dt = tau = 0.1
+  up to 100 x the paper's and failed at 200 x (rbc374) and 270 x
+  (sphere642), i.e. dt <= 10 k_paper / k for meshes up to 642 nodes.
 - the coupling: the fluid blew up where gamma N dt / (rho S agrid) reached
   1.4-2.1 (N nodes on the cell's surface S), whatever the mesh; advised
   below 1. gamma dt / m above about 1 makes particles overshoot too.
@@ -54,6 +59,11 @@ MESH_ERROR = ((162, 0.05), (374, 0.045), (642, 0.013), (1002, 0.014), (2562, 0.0
 #: membrane time-step limit at the paper's moduli, node mass 1
 MEMBRANE_DT = ((374, 0.81), (1002, 0.10))
 PAPER_KB, PAPER_KAL = 0.02, 0.007
+#: dt <= factor * k_paper / k for kb, kal above the paper's: a free cell, and
+#: a cell coupled to the fluid (gamma dt / m >= COUPLED_KICK_MIN) of at most
+#: COUPLED_NODES_MAX nodes (measured 26 Nov 2026: 100x held, 200x failed)
+MEMBRANE_DT_FACTOR_FREE, MEMBRANE_DT_FACTOR_COUPLED = 0.05, 10.0
+COUPLED_KICK_MIN, COUPLED_NODES_MAX = 0.1, 642
 #: gamma N dt / (rho S agrid): measured fluid blow-up from 1.4
 COUPLING_ADVISED, COUPLING_FAILED = 1.0, 1.4
 #: membrane_collision's a from which cells stayed apart (with a reach longer
@@ -190,14 +200,17 @@ def _cell_settings(system, fluid, gamma, report):
         slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
         dt_paper = math.exp(ys[0] + slope * (math.log(nodes) - xs[0]))
         limits = [dt_paper]
+        coupled = bool(gamma) and fluid is not None and gamma * dt / mass >= COUPLED_KICK_MIN \
+            and nodes <= COUPLED_NODES_MAX
+        factor = MEMBRANE_DT_FACTOR_COUPLED if coupled else MEMBRANE_DT_FACTOR_FREE
         if cell_type.kb > PAPER_KB:
-            limits.append(0.05 * PAPER_KB / cell_type.kb)
+            limits.append(factor * PAPER_KB / cell_type.kb)
         if cell_type.kal > PAPER_KAL:
-            limits.append(0.05 * PAPER_KAL / cell_type.kal)
+            limits.append(factor * PAPER_KAL / cell_type.kal)
         dt_max = min(limits) * math.sqrt(mass)
         report.append(Setting(
             f"{label}: time step against the membrane (kb, kal)", f"{dt:.3g}",
-            f"measured stable up to about {dt_max:.3g} (free cell)",
+            f"measured stable up to about {dt_max:.3g} ({'coupled to the fluid' if coupled else 'free cell'})",
             "stable" if dt <= 0.5 * dt_max else "near or past the membrane's stability limit",
             f"the membrane alone would allow a time step of about {0.5 * dt_max:.3g}"
             if dt < 0.1 * dt_max else "", ok=dt <= 0.5 * dt_max))
