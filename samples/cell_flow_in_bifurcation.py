@@ -1,87 +1,195 @@
 #!/usr/bin/env pyoif
 """Red blood cells (and optionally one stiff "rare" cell) flowing through a
-channel that bifurcates into two daughter branches and joins again -- the
-scene of the PyOIF paper's study (its Figs 2-5), on a smaller scale by default.
+channel that bifurcates into two daughter branches and joins again: the
+scene of the PyOIF paper's study (its Figs 2-5), its physical inputs in SI.
 
-    pyoif samples/cell_flow_in_bifurcation.py [--case A|B|C] [--cells N] [--rare]
-          [--cycles 20] [--steps 500] [--output DIR] [--vtk] [--seed S] [--full]
+    pyoif samples/cell_flow_in_bifurcation.py [--small | --full] [--case A|B|C]
+          [--cells N] [--rare] [--seed S] [--duration MS] [--output-every US]
+          [--speed MM_S] [--height UM] [--output DIR] [--vtk] [--no-plots]
+          [--progress auto|bar|lines|off]
 
-Geometry (lattice units = um, agrid 1): periodic in x; walls at z = 0..1 and
-z = H-1..H (channel height 20 in the paper, --height); the parent channel
-(width 30) splits at x = 50 into a lower branch and an upper branch of widths
-10/20 (case A), 12/18 (B), 15/15 (C) around an island, and joins again at
-x = 110. Cells: Evans-Fung RBCs of radius 3.91 with 374 nodes and the paper's
-moduli (ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9); the rare cell a sphere
-of radius 7.5 (--full) with 642 nodes, 10x stiffer. Seeded at random in the
-parent channel just upstream of the split (oif.seed_cells). Default: 6 RBCs,
-channel height 14, 10 cycles of 500 steps (about 25 s on one core); --full:
-the paper's 40 RBCs, height 20, the rare cell and 200 cycles.
+The paper's scene (--full). A channel 20 um high, periodic along the flow
+(x, 160 um): the parent channel (30 um wide) splits at x = 50 um into a
+lower and an upper branch of widths 10/20 um (case A), 12/18 um (B) or
+15/15 um (C) around an island, and joins again at x = 110 um. Plasma:
+density 1000 kg/m^3, viscosity 1.5 mPa s, driven so that the centre-line
+speed in the parent channel is 1.3 mm/s. 40 (or --cells 60) red blood cells
+(Evans-Fung shape, radius 3.91 um, 374 nodes) and the stiff rare cell (a
+sphere of radius 7.5 um, 642 nodes, ten times stiffer), lattice spacing
+1 um, time step 0.1 us, 138 ms of flow (the paper's "one pass of the rare
+cell"; about 1.4 hours on one core here, 16 hours on 6 cores in the paper).
 
-Output in DIR: cells.csv (time, cell, type, x, y, z, surface, volume,
-diameter per cycle), branches.csv (which branch each cell entered), and with
---vtk the membranes (legacy VTK, every cycle) and the walls as the fluid
-sees them (walls.vtp, VTK XML) for ParaView. At the end the share
-of cells that entered each branch is printed (the paper's Fig 3 quantity).
+The default (--small) finishes in a few minutes on a laptop. It differs
+from --full in: channel height 14 um (not 20), 24 RBCs (haematocrit about
+4 %, as the paper's 40 in the higher channel), no rare cell unless --rare
+(then of radius 4.5 um and 3.7 times as stiff as the RBCs, not 10: the
+time step's limit), 8 ms of flow, and a flow 27 times faster (centre
+line 35 mm/s) with the membranes and contacts 27 times stiffer: the
+capillary numbers (viscous against elastic forces: how much the cells
+deform) are the paper's, the Reynolds number is 27 times the paper's but
+still below 1 (0.7), so the cells' paths and shapes are those of the
+slow flow, reached in 1/27 of the time.
 
-The corners that face the flow (the island's, and where the parent channel
-widens into the branches and narrows again) are rounded with radius 2: a
-membrane driven onto a sharp corner wraps around it until a node is pushed
-through the wall. The default driving force (7e-3) keeps a margin there: at
-1e-2 a cell pressed onto the island's corner pushed a node through the wall
-for some seeds, and which seeds depended on round-off (a change of the
-floating-point operation order in the membrane forces moved it).
+Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
+- cells.csv: per output and cell, the centre (x, y, z; x folded into the
+  box), velocity, surface, volume, diameter, rotation angle (of the node
+  that was furthest downstream at the start, about the centre) and the
+  pass (how often the cell went round the periodic channel);
+- branches.csv: the branch each cell entered on each pass;
+- crossings.csv: centre y and z where a cell crossed x = 75 um (the
+  branches' middle) and x = 130 um (after the confluence) -- Fig 2;
+- haematocrit.csv: cell volume over fluid volume in the parent channel and
+  each branch (a cell counts where its centre is) -- Fig 5;
+- walls.vtp, cells.pvd (+ .vtp) and fluid.pvd (+ .vti, the mid-height
+  plane) with --vtk, for ParaView;
+- bifurcation_fig2..5.png from samples/analysis/plot_bifurcation.py (also
+  run by hand to combine seeds; --no-plots skips it).
+At the end: the share of branch entries per branch with its count and
+statistical uncertainty, the cells' volume and surface drift, and where the
+time went. Under mpirun every rank runs this script, rank 0 writes.
+
+Corners are rounded: where the parent channel widens into the branches
+and narrows again with radius 2 um, and the island's two ends to
+semicircles (radius 4 um, half its thickness). A cell caught on the apex of
+an island with corners of 2 um folded around the corner and its nodes
+flew apart within a microsecond (at every membrane stiffness from the
+paper's to 27x, at time steps 0.1 and 0.05 us, with stronger walls too);
+on the semicircle it slides off into a branch.
 """
 import argparse
 import csv
+import json
+import math
 import os
+import sys
+import time as wallclock
+
+import numpy as np
 
 import lbmd
 import oif
-from lbmd import lb, lbboundaries, shapes
+from lbmd import file_output, lb, lbboundaries, shapes
+from lbmd.units import UnitSystem, oif_moduli_from_si
 
-CASES = {"A": (10.0, 20.0), "B": (12.0, 18.0), "C": (15.0, 15.0)}
+UNITS = UnitSystem()  # the paper's: length 1 um, time 1 us, mass 1e-15 kg
 
-ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-ap.add_argument("--case", choices=sorted(CASES), default="A")
-ap.add_argument("--cells", type=int, default=None, help="number of RBCs (default 6, --full 40)")
-ap.add_argument("--rare", action="store_true", help="add the stiff rare cell")
-ap.add_argument("--full", action="store_true", help="the paper's sizes (slow: hours)")
-ap.add_argument("--height", type=float, default=None, help="channel height (default 14, --full 20)")
-ap.add_argument("--cycles", type=int, default=None, help="output cycles (default 10, --full 200)")
-ap.add_argument("--steps", type=int, default=500, help="MD steps per cycle (time step 0.1 us)")
-ap.add_argument("--output", default="output_bifurcation")
-ap.add_argument("--vtk", action="store_true", help="write VTK of the membranes every cycle")
-ap.add_argument("--seed", type=int, default=1)
-ap.add_argument("--force", type=float, default=7e-3,
-                help="body force density driving the flow (default: centre speed ~0.035 um/us so that cells "
-                     "reach the branches within the default run; the paper's 1.3e-3 um/us is ~27x slower)")
-args = ap.parse_args()
-n_rbc = args.cells if args.cells is not None else (40 if args.full else 6)
-n_cycles = args.cycles if args.cycles is not None else (200 if args.full else 10)
-height = args.height or (20.0 if args.full else 14.0)
-rare = args.rare or args.full
-os.makedirs(args.output, exist_ok=True)
+# --- the paper's physical parameters (SI)
+AGRID = 1e-6                          # m, lattice spacing
+TIME_STEP = 1e-7                      # s, MD time step = lattice update interval
+PLASMA_DENSITY = 1000.0               # kg/m^3
+PLASMA_VISCOSITY = 1.5e-3             # Pa s
+RBC_RADIUS = 3.91e-6                  # m
+# the paper's ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9 (um, us, 1e-15 kg)
+# as continuum moduli (lbmd.units.oif_moduli_from_si: mu0 = sqrt(3)/4 ks,
+# kc = sqrt(3)/2 kb, K_local = kal/2, K_global = kag/2, kv a bulk modulus)
+RBC_MEMBRANE = dict(shear_modulus=2.1651e-6,        # N/m
+                    bending_modulus=1.7321e-17,     # J
+                    local_area_modulus=3.5e-6,      # N/m
+                    global_area_modulus=3.5e-4,     # N/m
+                    volume_modulus=900.0)           # Pa
+RARE_STIFFNESS = 10.0                 # the rare cell's shear, bending, local area moduli / the RBC's
+# in fluid at time step 0.1 us, membranes held up to 100x the paper's RBC
+# moduli and failed at 200x (doc/accuracy.md): the rare cell of the fast
+# --small flow stays below that (3.7x the RBC's there)
+STIFFEST = 100.0
+# node-wall and cell-cell repulsion (soft sphere a / r^n within cutoff), in
+# lattice units; the cells' contact as doc/accuracy.md advises (a cutoff
+# longer than the mesh's edges, a >= 0.1)
+WALL_CONTACT = dict(a=0.02, n=1.5, cutoff=1.0)
+CELL_CONTACT = dict(a=0.1, n=1.2, cutoff=1.0)
 
-L_X, L_Y = 160.0, 40.0
-PARENT = (5.0, 35.0)                      # parent channel y range (width 30)
-SPLIT, JOIN = 50.0, 110.0                 # x of the bifurcation and of the confluence
-w_low, w_up = CASES[args.case]
-system = lbmd.System(box_l=[L_X, L_Y, height + 2.0])
-system.time_step = 0.1
+# --- geometry (m): channel along x, periodic; branches between SPLIT and JOIN
+CHANNEL_LENGTH, BOX_WIDTH = 160e-6, 40e-6
+PARENT = (5e-6, 35e-6)               # parent channel y range (width 30 um)
+SPLIT, JOIN = 50e-6, 110e-6
+CASES = {"A": (10e-6, 20e-6), "B": (12e-6, 18e-6), "C": (15e-6, 15e-6)}  # lower, upper branch widths
+PLANES = (75e-6, 130e-6)             # Fig 2: cells' y where they cross these x
+CORNER_RADIUS = 2e-6
+PAPER_SPEED = 1.3e-3                 # m/s, centre line of the parent channel
+
+SIZES = {
+    "full": dict(height=20e-6, cells=40, rare=True, rare_radius=7.5e-6, speed=PAPER_SPEED, duration=138e-3,
+                 output_every=0.2e-3),
+    "small": dict(height=14e-6, cells=24, rare=False, rare_radius=4.5e-6, speed=27 * PAPER_SPEED, duration=8e-3,
+                  output_every=20e-6),
+}
+
+
+def parse_arguments(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    size = ap.add_mutually_exclusive_group()
+    size.add_argument("--small", action="store_true", help="the laptop-sized scene (default)")
+    size.add_argument("--full", action="store_true", help="the paper's scene (slow: about 1.4 h on one core)")
+    ap.add_argument("--case", choices=sorted(CASES), default="A", help="branch widths: A 10/20, B 12/18, C 15/15 um")
+    ap.add_argument("--cells", type=int, default=None, help="number of RBCs (small 24, full 40; the paper: 40, 60)")
+    ap.add_argument("--rare", action="store_true", help="add the stiff rare cell (always there with --full)")
+    ap.add_argument("--seed", type=int, default=1, help="random seed of the cells' placement")
+    ap.add_argument("--duration", type=float, default=None, help="simulated flow in ms (small 8, full 138)")
+    ap.add_argument("--output-every", type=float, default=None, help="output interval in us (small 20, full 200)")
+    ap.add_argument("--speed", type=float, default=None,
+                    help="centre-line speed of the parent channel in mm/s (small 35.1, full 1.3); the membranes "
+                         "and contacts are scaled with it so that the capillary numbers stay the paper's")
+    ap.add_argument("--height", type=float, default=None, help="channel height in um (small 14, full 20)")
+    ap.add_argument("--stiffness", type=float, default=None,
+                    help="membrane moduli relative to the paper's (default: --speed / 1.3 mm/s)")
+    ap.add_argument("--output", default="output_bifurcation", help="output folder")
+    ap.add_argument("--vtk", action="store_true", help="write cells, fluid (mid-height plane) and walls for ParaView")
+    ap.add_argument("--no-plots", action="store_true", help="do not make the PNG figures at the end")
+    ap.add_argument("--progress", choices=("auto", "bar", "lines", "off"), default="auto",
+                    help="progress bar (auto: on a terminal), a line per output, or nothing")
+    expert = ap.add_argument_group("lattice units (benchmarks, tests)")
+    expert.add_argument("--cycles", type=int, default=None, help="number of outputs (instead of --duration)")
+    expert.add_argument("--steps", type=int, default=None, help="MD steps between outputs (instead of --output-every)")
+    expert.add_argument("--substeps", type=int, default=None, help="MD steps per lattice update (default 1)")
+    expert.add_argument("--force", type=float, default=None,
+                        help="body force density driving the flow, lattice units (instead of --speed: no "
+                             "calibration run)")
+    args = ap.parse_args(argv)
+    for name in ("cells", "cycles", "steps"):
+        value = getattr(args, name)
+        if value is not None and value < (0 if name in ("cells", "cycles") else 1):
+            ap.error(f"--{name} must be {'>= 0' if name != 'steps' else '>= 1'}, got {value}")
+    for name in ("duration", "output_every", "speed", "height", "force", "stiffness"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            ap.error(f"--{name.replace('_', '-')} must be a positive number, got {value}")
+    return args
+
+
+args = parse_arguments()
+size_name = "full" if args.full else "small"
+size = SIZES[size_name]
+n_rbc = args.cells if args.cells is not None else size["cells"]
+rare = args.rare or size["rare"]
+height = args.height * 1e-6 if args.height is not None else size["height"]
+speed = args.speed * 1e-3 if args.speed is not None else size["speed"]
+# dynamic similarity: membranes and contacts as stiff, relative to the
+# viscous forces, as the paper's at its speed
+stiffness = args.stiffness if args.stiffness is not None else speed / PAPER_SPEED
+if args.height is not None and args.height < 10:
+    raise SystemExit(f"--height {args.height} um: the channel must be at least 10 um high for RBCs of "
+                     f"radius {RBC_RADIUS * 1e6} um")
+
+# --- everything below in the engine's units (um, us, 1e-15 kg)
+L = lambda v: UNITS.to_lattice(v, "m")  # noqa: E731 (a length)
+tau, agrid = UNITS.to_lattice(TIME_STEP, "s"), L(AGRID)
+time_step = tau / (args.substeps or 1)  # MD steps per lattice update
+H = L(height)
+L_X, L_Y, H_BOX = L(CHANNEL_LENGTH), L(BOX_WIDTH), H + 2.0  # a wall one node thick below and above
+w_low, w_up = (L(w) for w in CASES[args.case])
+split, join, parent, r_corner = L(SPLIT), L(JOIN), tuple(L(p) for p in PARENT), L(CORNER_RADIUS)
+system = lbmd.System(box_l=[L_X, L_Y, H_BOX])
+system.time_step = time_step
 system.cell_system.skin = 0.3
 
-# --- geometry: blocks (fluid outside) extruded over the box height, and two walls
-H_BOX = height + 2.0
-R_CORNER = 2.0
 
-
-def block(x0, x1, y0, y1, rounded=()):
+def block(x0, x1, y0, y1, rounded=(), radius=None):
     """Rectangle [x0, x1] x [y0, y1] over the box height, its corners named in
-    `rounded` ('ll', 'lr', 'ul', 'ur': lower/upper, left/right) rounded with
-    radius R_CORNER: a union of two overlapping bars, a square at each sharp
-    corner and a cylinder at each rounded one."""
-    r = R_CORNER
-    box = lambda a0, a1, b0, b1: shapes.Rhomboid(corner=[a0, b0, 0.0], a=[a1 - a0, 0, 0], b=[0, b1 - b0, 0],
+    `rounded` ('ll', 'lr', 'ul', 'ur': lower/upper, left/right) rounded: a
+    union of two overlapping bars, a square at each sharp corner and a
+    cylinder at each rounded one."""
+    r = radius or r_corner
+    box = lambda a0, a1, b0, b1: shapes.Rhomboid(corner=[a0, b0, 0.0], a=[a1 - a0, 0, 0], b=[0, b1 - b0, 0],  # noqa
                                                   c=[0, 0, H_BOX], direction=1)
     parts = [box(x0 + r, x1 - r, y0, y1), box(x0, x1, y0 + r, y1 - r)]
     for name, (cx, cy, sx, sy) in {"ll": (x0, y0, 1, 1), "lr": (x1, y0, -1, 1),
@@ -95,95 +203,291 @@ def block(x0, x1, y0, y1, rounded=()):
     return shapes.Union(shapes=parts)
 
 
-island = (1.0 + w_low, L_Y - 1.0 - w_up)
-blocks = [
-    block(0.0, SPLIT, 0.0, PARENT[0], rounded=("ur",)),          # parent, below
-    block(0.0, SPLIT, PARENT[1], L_Y, rounded=("lr",)),          # parent, above
-    block(JOIN, L_X, 0.0, PARENT[0], rounded=("ul",)),           # outlet, below
-    block(JOIN, L_X, PARENT[1], L_Y, rounded=("ll",)),           # outlet, above
-    shapes.Rhomboid(corner=[SPLIT - 1.0, 0.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
-                    c=[0, 0, H_BOX]),                            # branch outer walls
-    shapes.Rhomboid(corner=[SPLIT - 1.0, L_Y - 1.0, 0.0], a=[JOIN - SPLIT + 2.0, 0, 0], b=[0, 1.0, 0],
-                    c=[0, 0, H_BOX]),
-    block(SPLIT, JOIN, island[0], island[1], rounded=("ll", "lr", "ul", "ur")),  # island
-]
-boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(height + 1.0))]
-boundaries += blocks
+island = (1.0 + w_low, L_Y - 1.0 - w_up)   # the branches' outer walls are 1 um thick
+island_middle = 0.5 * (island[0] + island[1])
+boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(H + 1.0)),
+              block(0.0, split, 0.0, parent[0], rounded=("ur",)),          # parent, below
+              block(0.0, split, parent[1], L_Y, rounded=("lr",)),          # parent, above
+              block(join, L_X, 0.0, parent[0], rounded=("ul",)),           # outlet, below
+              block(join, L_X, parent[1], L_Y, rounded=("ll",)),           # outlet, above
+              shapes.Rhomboid(corner=[split - 1.0, 0.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
+                              c=[0, 0, H_BOX]),                            # branch outer walls
+              shapes.Rhomboid(corner=[split - 1.0, L_Y - 1.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
+                              c=[0, 0, H_BOX]),
+              block(split, join, island[0], island[1], rounded=("ll", "lr", "ul", "ur"),
+                    radius=0.4999 * (island[1] - island[0]))]  # island, its ends semicircles
 
-# --- cells
-rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(3.91, 3.91, 3.91),
-                      ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9, normal=True)
-types, counts, ptypes = [rbc], [n_rbc], [0]
-if rare:
-    r_rare = 7.5 if args.full else 4.5
-    rare_type = oif.OifCellType(*oif.mesh_files("sphere642"), system=system, resize=(r_rare,) * 3,
-                                ks=0.05, kb=0.2, kal=0.07, kag=0.7, kv=0.9, normal=True)
-    types.append(rare_type)
-    counts.append(1)
-    ptypes.append(1)
-# just upstream of the split; the paper's 40 RBCs need the whole channel
-# upstream, i.e. also the outlet, which leads into the inlet (periodic in x)
-region = ([SPLIT - 30.0, PARENT[0], 1.0], [SPLIT - 3.0, PARENT[1], height + 1.0])
-seeding_boundaries = boundaries
-if n_rbc > 12:
-    region = ([0.0, PARENT[0], 1.0], [L_X, PARENT[1], height + 1.0])
-    seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[SPLIT - 3.0, 0.0, 0.0], a=[JOIN - SPLIT + 6.0, 0, 0],
-                                                       b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
-cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
-                       particle_types=ptypes, seed=args.seed)
-print(f"case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches {w_low}/{w_up}, "
-      f"height {height}")
-
-# --- fluid, coupling, contacts
-lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[args.force, 0.0, 0.0])
+# --- fluid, driven to the centre-line speed
+visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
+dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
+lbf = lb.LBFluid(agrid=agrid, dens=dens, visc=visc, tau=tau, ext_force_density=[0.0, 0.0, 0.0])
 system.actors.add(lbf)
 for b in boundaries:
     system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
     system.constraints.add(shape=b, particle_type=10, penetrable=False)
-if args.vtk:  # for ParaView: the walls as the fluid sees them (rounded corners included)
-    lbmd.vtk_output.write_wall_surface(os.path.join(args.output, "walls.vtp"), lbf)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
+probe = [0.5 * split, 0.5 * (parent[0] + parent[1]), 1.0 + 0.5 * H]  # centre line of the parent channel
+
+
+def settle():
+    """Run the fluid until the probe's speed changes by less than 0.1 % over
+    50 us (at least 100 us); returns that speed."""
+    chunk = max(1, int(round(50.0 / time_step)))
+    system.integrator.run(2 * chunk)
+    previous = lbf.get_interpolated_velocity(probe)[0]
+    for _ in range(40):
+        system.integrator.run(chunk)
+        u = lbf.get_interpolated_velocity(probe)[0]
+        if abs(u - previous) < 1e-3 * abs(u):
+            break
+        previous = u
+    return u
+
+
+def drive_flow(target):
+    """The body force density giving the centre-line speed `target` at the
+    probe, by fluid-only runs: Stokes flow is linear in the force, so a run
+    to steady state with a trial force (plane Poiseuille flow between the
+    walls, 8 eta u / H^2, times 1.5 for the side walls) scales it, and a
+    second run checks it (inertia at Reynolds numbers near 1 bends the
+    line a little). Returns the force and the speed reached."""
+    force = 1.5 * 8.0 * visc * dens * target / H**2
+    for attempt in range(3):
+        lbf.ext_force_density = [force, 0.0, 0.0]
+        reached = settle()
+        if abs(reached - target) < 2e-3 * target or attempt == 2:
+            return force, reached
+        force *= target / reached
+
+
+target_speed = UNITS.to_lattice(speed, "m/s")
+if args.force is None:
+    force, reached = drive_flow(target_speed)
+else:  # as given: the fluid starts at rest
+    force, reached = args.force, float("nan")
+lbf.ext_force_density = [force, 0.0, 0.0]
+args.force = force  # (the test scenes read it back)
+
+# --- cells
+rbc_moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()})
+rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3, normal=True,
+                      **rbc_moduli)
+types, counts, ptypes = [rbc], [n_rbc], [0]
+if rare:
+    rare_moduli = dict(rbc_moduli)
+    for k in ("ks", "kb", "kal"):
+        rare_moduli[k] *= min(RARE_STIFFNESS, STIFFEST / stiffness)
+    rare_type = oif.OifCellType(*oif.mesh_files("sphere642"), system=system, resize=(L(size["rare_radius"]),) * 3,
+                                normal=True, **rare_moduli)
+    types.append(rare_type)
+    counts.append(1)
+    ptypes.append(1)
+# at random in the parent channel (just upstream of the split; more than 12
+# cells need the whole parent channel, i.e. also the outlet, which leads
+# into the inlet)
+region = ([split - 30.0, parent[0], 1.0], [split - 3.0, parent[1], H + 1.0])
+seeding_boundaries = boundaries
+if n_rbc > 12:
+    region = ([0.0, parent[0], 1.0], [L_X, parent[1], H + 1.0])
+    seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[split - 3.0, 0.0, 0.0], a=[join - split + 6.0, 0, 0],
+                                                       b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
+cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
+                       particle_types=ptypes, seed=args.seed)
+system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=visc, dens=dens))
 for t in set(ptypes):
-    # node-wall repulsion strong enough for cells driven onto the island's corners
-    system.non_bonded_inter[t, 10].soft_sphere.set_params(a=0.02, n=1.5, cutoff=1.0, offset=0.0)
+    system.non_bonded_inter[t, 10].soft_sphere.set_params(
+        a=WALL_CONTACT["a"], n=WALL_CONTACT["n"], cutoff=WALL_CONTACT["cutoff"], offset=0.0)
     for u in set(ptypes):
         if u >= t:
-            system.non_bonded_inter[t, u].membrane_collision.set_params(a=0.01, n=4.0, cutoff=0.8, offset=0.0)
+            system.non_bonded_inter[t, u].membrane_collision.set_params(
+                a=CELL_CONTACT["a"], n=CELL_CONTACT["n"], cutoff=CELL_CONTACT["cutoff"], offset=0.0)
+
+# --- output schedule
+steps_per_output = args.steps or max(1, int(round(UNITS.to_lattice(
+    (args.output_every * 1e-6 if args.output_every else size["output_every"]), "s") / time_step)))
+duration = args.duration * 1e-3 if args.duration is not None else size["duration"]
+n_outputs = args.cycles if args.cycles is not None else max(1, int(round(
+    UNITS.to_lattice(duration, "s") / time_step / steps_per_output)))
+total_steps = n_outputs * steps_per_output
+
+rank0 = lbmd.rank == 0
+say = print if rank0 else (lambda *a, **k: None)
+to_ms = lambda t: UNITS.to_si(t, "s") * 1e3  # noqa: E731
+to_mm_s = lambda v: UNITS.to_si(v, "m/s") * 1e3  # noqa: E731
+say(f"{size_name} scene, case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches "
+    f"{w_low:g}/{w_up:g} um, height {H:g} um; centre-line speed {speed * 1e3:.3g} mm/s (reached "
+    f"{to_mm_s(reached):.4g} mm/s before the cells came, body force {force:.4g}), membranes {stiffness:.3g}x the paper's moduli; {to_ms(total_steps * time_step):g} ms of flow "
+    f"= {total_steps} steps, output every {to_ms(steps_per_output * time_step) * 1e3:g} us")
+
+# --- per-cell bookkeeping: rotation, passes round the periodic channel, branches
+for c in cells:  # the rotation angle of the node furthest downstream, about the centre
+    c.set_rotation(ids=[int(np.argmax(c.mesh.positions()[:, 0]))])
+volume0 = np.array([c.volume() for c in cells])
+surface0 = np.array([c.surface() for c in cells])
+centre_previous = np.array([c.get_origin() for c in cells])
+entered = {}          # (cell, pass) -> branch
+time0 = system.time   # the cells are released now (the calibration run came before)
+
+
+def region_of(x, y):
+    if split <= x < join:
+        return "lower" if y < island_middle else "upper"
+    return "parent"
+
+
+# the fluid volume of each region, from the boundary flags (node centres)
+flags = lbf[:, :, :].boundary
+node_x = (np.arange(flags.shape[0]) + 0.5) * agrid
+node_y = (np.arange(flags.shape[1]) + 0.5) * agrid
+fluid_columns = (flags == 0).sum(axis=2) * agrid**3
+in_branches = (node_x >= split) & (node_x < join)
+fluid_volume = {"parent": fluid_columns[~in_branches].sum(),
+                "lower": fluid_columns[np.ix_(in_branches, node_y < island_middle)].sum(),
+                "upper": fluid_columns[np.ix_(in_branches, node_y >= island_middle)].sum()}
+
+
+class Table:
+    """A CSV file written by rank 0 as the run goes (flushed every output:
+    a run that dies keeps its rows)."""
+
+    def __init__(self, name, header):
+        self.file = open(os.path.join(args.output, name) if rank0 else os.devnull, "w", newline="")
+        self.writer = csv.writer(self.file)
+        self.writer.writerow(header)
+
+    def row(self, *values):
+        self.writer.writerow([f"{v:.4f}" if isinstance(v, float) else v for v in values])
+
+    def close(self):
+        self.file.close()
+
+
+os.makedirs(args.output, exist_ok=True)
+# the scene, for plot_bifurcation.py (which combines runs of one case)
+file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
+    size=size_name, case=args.case, seed=args.seed, rbcs=n_rbc, rare=rare, channel_length_um=L_X,
+    box_width_um=L_Y, height_um=H, parent_um=parent, split_um=split, join_um=join, island_um=island,
+    branch_widths_um=(w_low, w_up), planes_um=[L(p) for p in PLANES], speed_mm_s=speed * 1e3,
+    stiffness=stiffness, force=force, time_step_us=time_step, steps_per_output=steps_per_output,
+    outputs=n_outputs, fluid_volume_um3={k: float(v) for k, v in fluid_volume.items()}), indent=1) + "\n")
+tables = dict(
+    cells=Table("cells.csv", ["time_ms", "cell", "type", "x_um", "y_um", "z_um", "vx_mm_s", "vy_mm_s", "vz_mm_s",
+                              "surface_um2", "volume_um3", "diameter_um", "rotation_deg", "pass"]),
+    branches=Table("branches.csv", ["cell", "type", "pass", "branch", "time_ms"]),
+    crossings=Table("crossings.csv", ["time_ms", "cell", "type", "plane_x_um", "y_um", "z_um", "pass"]),
+    haematocrit=Table("haematocrit.csv", ["time_ms", "parent", "lower", "upper"]))
+if args.vtk:
+    lbmd.vtk_output.write_wall_surface(os.path.join(args.output, "walls.vtp"), lbf)
+    cell_series = oif.CellSeries(os.path.join(args.output, "cells.pvd"))
+    fluid_series = lbmd.vtk_output.FluidSeries(os.path.join(args.output, "fluid.pvd"), lbf,
+                                               slice=("z", int(round(0.5 * H_BOX - 0.5))))
+
+
+def record():
+    """One output: every cell's row, branch entries, plane crossings since the
+    last output (interpolated), the haematocrit; collective under MPI."""
+    t = to_ms(system.time - time0)
+    cell_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}
+    for k, c in enumerate(cells):
+        centre = c.get_origin()
+        x, y, z = np.mod(centre, system.box_l)
+        lap = int(math.floor(centre[0] / L_X))
+        velocity = c.get_velocity()
+        volume = c.volume()
+        cell_volume[region_of(x, y)] += volume
+        tables["cells"].row(t, k, c.particle_type, float(x), float(y), float(z),
+                            *(float(to_mm_s(v)) for v in velocity), float(c.surface()), float(volume),
+                            float(c.diameter()), float(math.degrees(c.get_rotation_angles()[0])), lap)
+        if split + 8.0 < x < join and (k, lap) not in entered:
+            entered[k, lap] = region_of(x, y)
+            tables["branches"].row(k, c.particle_type, lap, entered[k, lap], t)
+        before = centre_previous[k]
+        for plane in (L(p) for p in PLANES):  # crossings of x = plane + n L_X, n integer
+            for n in range(math.ceil((before[0] - plane) / L_X), math.floor((centre[0] - plane) / L_X) + 1):
+                if before[0] < plane + n * L_X <= centre[0]:  # linear between the outputs
+                    w = (plane + n * L_X - before[0]) / (centre[0] - before[0])
+                    at = np.mod(before + w * (centre - before), system.box_l)
+                    tables["crossings"].row(t, k, c.particle_type, plane, float(at[1]), float(at[2]), n)
+        centre_previous[k] = centre
+    tables["haematocrit"].row(t, *(f"{cell_volume[r] / fluid_volume[r]:.6f}" for r in ("parent", "lower", "upper")))
+    for table in tables.values():
+        table.file.flush()
+    if args.vtk:
+        cell_series.write(cells, system.time)
+        fluid_series.write(system.time)
+
+
+class Progress:
+    """A tqdm bar (Debian's python3-tqdm: steps/s and time left) on a
+    terminal, else a line per output; rank 0 only."""
+
+    def __init__(self, mode):
+        if mode == "auto":
+            mode = "bar" if sys.stderr.isatty() else "lines"
+        self.mode = mode if rank0 else "off"
+        self.bar = None
+        self.started = self.said = wallclock.monotonic()
+        if self.mode == "bar":
+            try:
+                from tqdm import tqdm
+                self.bar = tqdm(total=total_steps, unit="step", unit_scale=True, dynamic_ncols=True,
+                                bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} steps [{elapsed}<{remaining}, "
+                                           "{rate_fmt}] {postfix}")
+            except ImportError:
+                print("(no progress bar: Debian's python3-tqdm is not installed; a line per output instead)")
+                self.mode = "lines"
+
+    def update(self, done):
+        simulated = f"{to_ms(system.time - time0):.3f} ms of {to_ms(total_steps * time_step):g}"
+        lower = sum(v == "lower" for v in entered.values())
+        upper = sum(v == "upper" for v in entered.values())
+        if self.bar is not None:
+            self.bar.update(steps_per_output)
+            self.bar.set_postfix_str(f"{simulated}, entries lower {lower} upper {upper}", refresh=False)
+        elif self.mode == "lines" and (wallclock.monotonic() - self.said > 10.0 or done == total_steps):
+            self.said = wallclock.monotonic()  # a line every 10 s
+            elapsed = self.said - self.started
+            rate = done / elapsed if elapsed > 0 else 0.0
+            left = (total_steps - done) / rate if rate > 0 else 0.0
+            print(f"{simulated}  {rate:7.0f} steps/s  {left:6.0f} s left  branch entries: lower {lower}, "
+                  f"upper {upper}", flush=True)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
 
 # --- run
-branch = {}  # cell index -> "lower"/"upper", decided when the centre is inside the branches
-# under mpirun every rank runs this loop (the cells' queries are collective),
-# rank 0 writes the tables
-def writer_path(name):
-    return os.path.join(args.output, name) if lbmd.rank == 0 else os.devnull
+system.integrator.reset_timings()  # the report below covers the cells' run, not the calibration
+record()
+progress = Progress(args.progress)
+for i in range(1, n_outputs + 1):
+    system.integrator.run(steps_per_output)
+    record()
+    progress.update(i * steps_per_output)
+progress.close()
+for table in tables.values():
+    table.close()
 
-
-with open(writer_path("cells.csv"), "w", newline="") as f:
-    out = csv.writer(f)
-    out.writerow(["time", "cell", "type", "x", "y", "z", "surface", "volume", "diameter"])
-    for i in range(n_cycles + 1):
-        if i:
-            system.integrator.run(args.steps)
-        for k, c in enumerate(cells):
-            x, y, z = c.get_origin_folded()
-            out.writerow([f"{system.time:.1f}", k, c.particle_type, f"{x:.3f}", f"{y:.3f}", f"{z:.3f}",
-                          f"{c.surface():.3f}", f"{c.volume():.3f}", f"{c.diameter():.3f}"])
-            if SPLIT + 8.0 < x < JOIN and k not in branch:
-                branch[k] = "lower" if y < 1.0 + w_low + 0.5 * (L_Y - 2.0 - w_low - w_up) else "upper"
-            if args.vtk:
-                c.output_vtk_pos_folded(os.path.join(args.output, f"cell{k}_{i}.vtk"))
-        f.flush()
-        print(f"cycle {i:3d}  time {system.time:8.1f} us  cells in branches: "
-              f"lower {sum(v == 'lower' for v in branch.values())}, upper {sum(v == 'upper' for v in branch.values())}")
-with open(writer_path("branches.csv"), "w", newline="") as f:
-    w = csv.writer(f)
-    w.writerow(["cell", "type", "branch"])
-    for k, v in sorted(branch.items()):
-        w.writerow([k, cells[k].particle_type, v])
-n = max(len(branch), 1)
-print(f"share of cells entering the lower (width {w_low}) / upper (width {w_up}) branch: "
-      f"{sum(v == 'lower' for v in branch.values()) / n:.2f} / {sum(v == 'upper' for v in branch.values()) / n:.2f}"
-      f" ({len(branch)} cells)")
+# --- results
+counts = {b: sum(v == b for v in entered.values()) for b in ("lower", "upper")}
+n = counts["lower"] + counts["upper"]
+if n < 10:
+    say(f"branch entries: lower {counts['lower']}, upper {counts['upper']}: too few cells passed the "
+        f"bifurcation to give a share (run longer: --duration)")
+else:
+    p = counts["lower"] / n
+    error = math.sqrt(p * (1.0 - p) / n)  # binomial standard error, entries taken as independent
+    say(f"share of the {n} branch entries: lower (width {w_low:g} um) {p:.2f} +- {error:.2f}, "
+        f"upper (width {w_up:g} um) {1 - p:.2f} +- {error:.2f}")
+volume_drift = np.abs(np.array([c.volume() for c in cells]) / volume0 - 1.0).max()
+surface_drift = np.abs(np.array([c.surface() for c in cells]) / surface0 - 1.0).max()
+say(f"largest change of a cell's volume {100 * volume_drift:.2f} %, of its surface {100 * surface_drift:.2f} %")
 # where the time went (wall clock by phase of the step), as after a LAMMPS run
-print(system.integrator.timing_report())
-print(f"output in {os.path.abspath(args.output)}/: cells.csv, branches.csv" + (", VTK files" if args.vtk else ""))
+say(system.integrator.timing_report())
+if rank0 and not args.no_plots:
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "analysis"))
+    import plot_bifurcation
+    figures = plot_bifurcation.make_figures([args.output], args.output)
+    say("figures: " + ", ".join(os.path.basename(f) for f in figures))
+say(f"output in {os.path.abspath(args.output)}/: cells.csv, branches.csv, crossings.csv, haematocrit.csv"
+    + (", walls.vtp, cells.pvd, fluid.pvd" if args.vtk else ""))

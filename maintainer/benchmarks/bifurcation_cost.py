@@ -63,7 +63,7 @@ def main():
     with tempfile.TemporaryDirectory() as out:
         for n in args.cells:
             run = [sys.executable, sample, "--full", "--cells", str(n), "--cycles", "1", "--output", out,
-                   "--steps", str(args.steps)]
+                   "--steps", str(args.steps), "--no-plots", "--progress", "off"]
             per_step, lattice = min(timed_steps(run) for _ in range(args.repeats))
             s1000 = 1000.0 * per_step
             hours = per_step * STEPS_138_MS / 3600.0

@@ -211,7 +211,7 @@ def run_once(args, cells, ranks, height, tmp):
     """One run of the sample at `ranks` ranks: its report and the child's data."""
     js = os.path.join(tmp, f"run_{cells}_{ranks}_{height}.json")
     sample_args = [SAMPLE, "--full", "--cells", str(cells), "--cycles", str(args.cycles), "--steps",
-                   str(args.steps), "--output", os.path.join(tmp, "out")]
+                   str(args.steps), "--output", os.path.join(tmp, "out"), "--no-plots", "--progress", "off"]
     if height != FULL_HEIGHT:
         sample_args += ["--height", f"{height:g}"]
     cmd = [args.pyoif, os.path.abspath(__file__), "--child", js, "--"] + sample_args

@@ -32,8 +32,9 @@ where a subdomain starts, int(n k / K)):
 - crossing: cells with a body force 80x stronger, 300 steps: the cells
   move 4 lattice spacings (the one near the wall 2) across the cuts and
   the periodic boundary.
-- bifurcation: samples/cell_flow_in_bifurcation.py's default scene (6
-  RBCs, 160x40x16) run in this process with --cycles 2 --steps STEPS/2;
+- bifurcation: samples/cell_flow_in_bifurcation.py's default scene with 6
+  RBCs (160x40x16, the body force given: no calibration run) run in this
+  process with --cycles 2 --steps STEPS/2;
   its printed cycle table and cells.csv are kept as text too; cuts x:
   80 | 53, 106 | 40, 80, 120.
 """
@@ -166,7 +167,7 @@ def run_bifurcation(steps, node_grid):
     folder = tempfile.mkdtemp(prefix=f"mpi_scenes_bif_r{rank}_")
     argv = sys.argv
     sys.argv = ["cell_flow_in_bifurcation.py", "--cycles", "2", "--steps", str(steps // 2),
-                "--output", folder]
+                "--output", folder, "--cells", "6", "--force", "3e-3", "--no-plots", "--progress", "off"]
     out = io.StringIO()
     try:
         with contextlib.redirect_stdout(out):

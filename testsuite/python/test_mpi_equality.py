@@ -276,11 +276,12 @@ class MpiEquality(unittest.TestCase):
             rows = list(csv.DictReader(io.StringIO(str(r["text_cells_csv"]))))
             self.assertEqual(len(rows), 3 * 6)
             first, last = rows[:6], rows[-6:]
-            np.testing.assert_allclose([float(x["volume"]) for x in last], [float(x["volume"]) for x in first],
-                                       rtol=1e-2)
-            self.assertTrue(all(float(b["x"]) > float(a["x"]) for a, b in zip(first, last)), "cells not carried")
-            np.testing.assert_allclose(r["cell_volume"], [float(x["volume"]) for x in last], atol=1e-3)
-            self.assertIn("cycle   2", str(r["text_sample_stdout"]))
+            np.testing.assert_allclose([float(x["volume_um3"]) for x in last],
+                                       [float(x["volume_um3"]) for x in first], rtol=1e-2)
+            self.assertTrue(all(float(b["x_um"]) > float(a["x_um"]) for a, b in zip(first, last)),
+                            "cells not carried")
+            np.testing.assert_allclose(r["cell_volume"], [float(x["volume_um3"]) for x in last], atol=1e-3)
+            self.assertIn("small scene, case A: 6 RBCs", str(r["text_sample_stdout"]))
         self.check_scene("bifurcation", sane)
 
     # --- subdomain grids the automatic choice never makes (it splits the

@@ -4,6 +4,7 @@ membrane moduli, output files ParaView and plotting scripts read. (Before
 this test nothing ran the samples, and a rule change once broke the
 flagship's --rare and --full modes unnoticed.)"""
 import csv
+import json
 import os
 import sys
 import tempfile
@@ -71,40 +72,76 @@ class Samples(unittest.TestCase):
     def test_bifurcation(self):
         out = run_sample("cell_flow_in_bifurcation.py", "--cells", "4", "--cycles", "2", "--steps", "100",
                          "--output", "out", cwd=self.tmp.name)
-        with open(os.path.join(self.tmp.name, "out", "cells.csv")) as f:
-            table = list(csv.DictReader(f))
-        self.assertEqual(len(table), 3 * 4)  # cycles 0..2, four cells
+        folder = os.path.join(self.tmp.name, "out")
+        # the flow is driven to the paper's centre-line speed times 27 (--small)
+        # by fluid-only runs before the cells come: within 0.2 % (the sample's
+        # own criterion) of 27 x 1.3 mm/s
+        head = next(line for line in out.splitlines() if line.startswith("small scene"))
+        reached = float(head.split("reached ")[1].split()[0])
+        self.assertAlmostEqual(reached, 27 * 1.3, delta=2e-3 * 27 * 1.3)
+        cells = read_csv(os.path.join(folder, "cells.csv"))
+        self.assertEqual(len(cells), 3 * 4)  # outputs 0..2, four cells
         by_cell = {}
-        for row in table:
+        for row in cells:
             by_cell.setdefault(row["cell"], []).append(row)
         for cell, rows in by_cell.items():
-            volumes = [float(r["volume"]) for r in rows]
+            volumes = [float(r["volume_um3"]) for r in rows]
             np.testing.assert_allclose(volumes, volumes[0], rtol=1e-2, err_msg=f"cell {cell}")
+            # the cells move with the flow: mean node velocity along +x, below the centre-line speed
+            vx = float(rows[-1]["vx_mm_s"])
+            self.assertTrue(0.0 < vx < 1.05 * reached, f"cell {cell}: vx {vx} mm/s")
         # the pressure-driven flow carries the cells towards the bifurcation (+x)
-        x0 = np.mean([float(rows[0]["x"]) for rows in by_cell.values()])
-        x2 = np.mean([float(rows[-1]["x"]) for rows in by_cell.values()])
+        x0 = np.mean([float(rows[0]["x_um"]) for rows in by_cell.values()])
+        x2 = np.mean([float(rows[-1]["x_um"]) for rows in by_cell.values()])
         self.assertGreater(x2, x0)
-        self.assertIn("share of cells entering the lower", out)
+        # haematocrit: the cells' volume over the parent channel's fluid volume
+        # (all cells start there); the branches are empty at first
+        h = read_csv(os.path.join(folder, "haematocrit.csv"))
+        self.assertEqual(len(h), 3)
+        scene = json.load(open(os.path.join(folder, "scene.json")))
+        volume = sum(float(r["volume_um3"]) for r in cells[:4])
+        parent_fluid = (scene["height_um"] * (scene["parent_um"][1] - scene["parent_um"][0])
+                        * (scene["channel_length_um"] - scene["join_um"] + scene["split_um"]))
+        self.assertAlmostEqual(float(h[0]["parent"]), volume / parent_fluid, delta=0.1 * volume / parent_fluid)
+        self.assertEqual((float(h[0]["lower"]), float(h[0]["upper"])), (0.0, 0.0))
+        self.assertIn("branch entries", out)
         self.assertIn("total (200 steps)", out)  # the timing report
-        # with the stiff rare cell (642 nodes, its own particle type)
+        for number in (2, 3, 4, 5):  # the paper's figures, from plot_bifurcation.py
+            self.assertGreater(os.path.getsize(os.path.join(folder, f"bifurcation_fig{number}.png")), 10000)
+        # with the stiff rare cell (642 nodes, its own particle type) and VTK
         run_sample("cell_flow_in_bifurcation.py", "--cells", "2", "--rare", "--cycles", "1", "--steps", "20",
-                   "--output", "rare", "--vtk", cwd=self.tmp.name)
-        # --vtk: the membranes every cycle, and the walls as the fluid sees them
-        # (VTK XML, read back: a surface at the heights of the channel walls)
+                   "--output", "rare", "--vtk", "--no-plots", cwd=self.tmp.name)
+        # --vtk: the membranes and the fluid's mid-plane every output, and the
+        # walls as the fluid sees them (VTK XML, read back: a surface at the
+        # heights of the channel walls)
         import vtk
+        rare = os.path.join(self.tmp.name, "rare")
         reader = vtk.vtkXMLPolyDataReader()
-        reader.SetFileName(os.path.join(self.tmp.name, "rare", "walls.vtp"))
+        reader.SetFileName(os.path.join(rare, "walls.vtp"))
         reader.Update()
         walls = reader.GetOutput()
         self.assertGreater(walls.GetNumberOfPolys(), 1000)
         z_low, z_high = walls.GetBounds()[4:6]
         self.assertEqual(z_low, 1.0)  # halfway between the solid node at 0.5 and the fluid node at 1.5
-        self.assertEqual(sorted(vtk_point_count(os.path.join(self.tmp.name, "rare", f"cell{k}_1.vtk"))
-                                for k in range(3)), [374, 374, 642])  # two RBCs and the rare cell
-        with open(os.path.join(self.tmp.name, "rare", "cells.csv")) as f:
-            table = list(csv.DictReader(f))
+        reader.SetFileName(os.path.join(rare, "cells_000001.vtp"))
+        reader.Update()
+        self.assertEqual(reader.GetOutput().GetNumberOfPoints(), 2 * 374 + 642)  # two RBCs and the rare cell
+        image = vtk.vtkXMLImageDataReader()
+        image.SetFileName(os.path.join(rare, "fluid_000001.vti"))
+        image.Update()
+        self.assertEqual(image.GetOutput().GetDimensions(), (160, 40, 1))  # the mid-height plane
+        for name in ("cells.pvd", "fluid.pvd"):
+            self.assertIn("cells_000001.vtp" if name == "cells.pvd" else "fluid_000001.vti",
+                          open(os.path.join(rare, name)).read())
+        table = read_csv(os.path.join(rare, "cells.csv"))
         self.assertEqual(len(table), 2 * 3)
         self.assertEqual(len({row["type"] for row in table}), 2)
+        self.assertFalse(any(name.endswith(".png") for name in os.listdir(rare)))  # --no-plots
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
 
 
 if __name__ == "__main__":

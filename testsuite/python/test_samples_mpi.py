@@ -45,8 +45,9 @@ def run_sample_mpi(name, *args, cwd):
 
 def result_lines(stdout):
     """The lines of a sample's result that are not a numeric table row: the
-    bifurcation's per-cycle and branch-share lines."""
-    return [line for line in stdout.splitlines() if line.startswith(("cycle ", "share "))]
+    bifurcation's scene line, branch entries and the cells' drift."""
+    return [line for line in stdout.splitlines()
+            if line.startswith(("cycle ", "share ", "small scene", "branch entries", "largest change"))]
 
 
 def files_under(folder):
@@ -90,7 +91,8 @@ class SamplesUnderMpirun(unittest.TestCase):
 
     def test_bifurcation(self):
         self.check_same_as_serial("cell_flow_in_bifurcation.py", "--cells", "4", "--cycles", "2", "--steps", "100",
-                                  "--output", "out", csv_files=("out/cells.csv", "out/branches.csv"))
+                                  "--output", "out", csv_files=("out/cells.csv", "out/branches.csv", "out/crossings.csv",
+                                             "out/haematocrit.csv", "out/scene.json"))
 
     def test_bifurcation_rare(self):
         self.check_same_as_serial("cell_flow_in_bifurcation.py", "--cells", "2", "--rare", "--cycles", "1",
