@@ -63,50 +63,14 @@ import time
 
 import numpy as np
 
-import lbmd
 import oif
-from lbmd import lb, lbboundaries, shapes
-
-AGRID, TIME_STEP, DENS, VISC = 1.0, 0.1, 1.0, 1.5  # lattice units; visc is kinematic, eta = DENS * VISC
-ETA = DENS * VISC
+from shear_flow import DENS, ETA, VISC, add_couette_flow, couette_system, taylor_deformation
 
 
 def theory_d(ca, nu_s=0.5):
     """Barthes-Biesel & Rallison (1981) first-order Taylor deformation,
     Ca = eta gamma_dot a / Gs; nu_s 1/2 is the neo-Hookean membrane."""
     return 1.25 * (2.0 + nu_s) / (1.0 + nu_s) * ca
-
-
-def volume_second_moment(pos, triangles):
-    """Volume V, centroid and second moment M = int (x - c)(x - c)^T dV of the
-    body enclosed by the triangulated surface (outward normals), from the
-    signed tetrahedra (c, p1, p2, p3): int_tet x x^T dV = det/120 (sum_i
-    v_i v_i^T + (sum_i v_i)(sum_i v_i)^T) for vertices v_i relative to c."""
-    c = pos.mean(axis=0)
-    p = pos[triangles] - c  # (T, 3, 3)
-    det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2]))
-    vol = det.sum() / 6.0
-    # the volume centroid, then the moment about it
-    centroid = (det[:, None] * p.sum(axis=1)).sum(axis=0) / 24.0 / vol + c
-    p = pos[triangles] - centroid
-    det = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2]))
-    s = p.sum(axis=1)
-    m = (np.einsum("t,tij,tik->jk", det, p, p) + np.einsum("t,tj,tk->jk", det, s, s)) / 120.0
-    return vol, centroid, m
-
-
-def taylor_deformation(pos, triangles):
-    """(D, inclination angle in degrees) of the equivalent ellipsoid in the
-    shear plane (x flow, z gradient): semi-axes L, B from the eigenvalues
-    V L^2/5, V B^2/5 of the x-z block of the second moment."""
-    vol, _, m = volume_second_moment(pos, triangles)
-    block = m[np.ix_([0, 2], [0, 2])] / vol  # / vol: independent of the triangles' orientation
-    w, v = np.linalg.eigh(block)
-    b, length = np.sqrt(5.0 * w)
-    axis = v[:, 1]
-    angle = math.degrees(math.atan2(axis[1], axis[0]))
-    angle = (angle + 90.0) % 180.0 - 90.0
-    return (length - b) / (length + b), angle
 
 
 def run_capsule(ca, mesh="sphere642", radius=6.0, height_ratio=10.0, shear_rate=0.008, strain=4.0,
@@ -123,28 +87,19 @@ def run_capsule(ca, mesh="sphere642", radius=6.0, height_ratio=10.0, shear_rate=
     kv = 2.0 * gs / radius                       # volume modulus, pressure ~ kv dV/V against Gs/a
     height = height_ratio * radius
     lx = ly = math.ceil(6.0 * radius)
-    lz = height + 2.0 * AGRID
-    system = lbmd.System(box_l=[lx, ly, lz])
-    system.time_step = TIME_STEP
-    system.cell_system.skin = 0.2
+    system = couette_system(lx, ly, height)
+    lz = system.box_l[2]
     ct = oif.OifCellType(*oif.mesh_files(mesh), system=system, resize=(radius,) * 3,
                          ks=ks, kal=kal, kb=kb, kv=kv, normal=True)
     gamma = coupling * ct.suggest_LBgamma(visc=VISC, dens=DENS)
     # node mass: gamma dt / m <= 1/2 keeps the friction step stable (check_settings); the
     # steady shape does not depend on it
-    mass = max(1.0, 2.0 * gamma * TIME_STEP)
+    mass = max(1.0, 2.0 * gamma * system.time_step)
     cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[lx / 2, ly / 2, lz / 2], particle_mass=mass)
     triangles = np.asarray(ct.mesh.triangle_ids)
-    fluid = lb.LBFluid(agrid=AGRID, dens=DENS, visc=VISC, tau=TIME_STEP)
-    system.actors.add(fluid)
-    wall_speed = 0.5 * shear_rate * height
-    system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 0, 1], dist=AGRID),
-                                                    velocity=[-wall_speed, 0, 0]))
-    system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 0, -1], dist=-(lz - AGRID)),
-                                                    velocity=[wall_speed, 0, 0]))
-    system.thermostat.set_lb(LB_fluid=fluid, gamma=gamma)
+    add_couette_flow(system, shear_rate, gamma)
     v0, s0 = cell.volume(), cell.surface()
-    total_steps = int(round(strain / shear_rate / TIME_STEP))
+    total_steps = int(round(strain / shear_rate / system.time_step))
     chunk = max(1, total_steps // samples)
     history = []
     for i in range(samples):
