@@ -290,9 +290,18 @@ if n_rbc > 12:
     region = ([0.0, parent[0], 1.0], [L_X, parent[1], H + 1.0])
     seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[split - 3.0, 0.0, 0.0], a=[join - split + 6.0, 0, 0],
                                                        b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
+# the coupling's friction per node, and the node mass at gamma dt / m = 0.3:
+# the friction relaxes a node's velocity to the fluid's within a few steps.
+# With heavier nodes (gamma dt / m 0.04-0.18; mass 1 here gives 0.15) the
+# membranes of cells jammed at the island's apex folded through
+# themselves within a few ms at every stiffness tried, as the RBC in shear
+# flow did (doc/validation.md); the physical mass of a node, 27 pg / 374 =
+# 0.07 in these units, is lighter still and needs no other change
+gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
+node_mass = gamma * time_step / 0.3
 cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
-                       particle_types=ptypes, seed=args.seed)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=visc, dens=dens))
+                       particle_types=ptypes, seed=args.seed, particle_mass=node_mass)
+system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
 for t in set(ptypes):
     system.non_bonded_inter[t, 10].soft_sphere.set_params(
         a=WALL_CONTACT["a"], n=WALL_CONTACT["n"], cutoff=WALL_CONTACT["cutoff"], offset=0.0)

@@ -159,10 +159,17 @@ def figure4(runs, plt, max_cells=3):
     c, b = run["cells"], run["branches"]
     branch_of = {(int(k), int(p)): name for k, p, name in zip(b.get("cell", []), b.get("pass", []),
                                                              b.get("branch", []))}
-    # the RBCs with the most passes through a branch
+    # RBCs through each branch (the narrow one first), most passes first
     rbc_ids = sorted({int(k) for k, t in zip(c["cell"], c["type"]) if t == 0})
     passes = {k: sum(1 for (kk, _) in branch_of if kk == k) for k in rbc_ids}
-    chosen = sorted(rbc_ids, key=lambda k: -passes[k])[:max_cells]
+    chosen = []
+    for name in ("lower", "upper", None):
+        for k in sorted(rbc_ids, key=lambda k: -passes[k]):
+            went = any(kk == k and b == name for (kk, _), b in branch_of.items()) if name else True
+            if went and k not in chosen and len(chosen) < (1 if name == "lower" else max_cells):
+                chosen.append(k)
+                if name == "lower":
+                    break
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     colours = {"lower": "tab:blue", "upper": "tab:orange", None: "0.6"}
     styles = ["-", "--", ":", "-."]
