@@ -54,7 +54,8 @@ semicircles (radius 4 um, half its thickness). A cell caught on the apex of
 an island with corners of 2 um folded around the corner and its nodes
 flew apart within a microsecond (at every membrane stiffness from the
 paper's to 27x, at time steps 0.1 and 0.05 us, with stronger walls too);
-on the semicircle it slides off into a branch.
+on the semicircle it slides off into a branch. The membranes' nodes weigh
+gamma dt / 0.3 (see the cells' set-up; doc/study.md).
 """
 import argparse
 import csv
@@ -322,10 +323,13 @@ rank0 = lbmd.rank == 0
 say = print if rank0 else (lambda *a, **k: None)
 to_ms = lambda t: UNITS.to_si(t, "s") * 1e3  # noqa: E731
 to_mm_s = lambda v: UNITS.to_si(v, "m/s") * 1e3  # noqa: E731
+driving = (f"centre-line speed {speed * 1e3:.3g} mm/s (reached {to_mm_s(reached):.4g} mm/s before the cells "
+           f"came, body force {force:.4g})" if math.isfinite(reached)
+           else f"body force {force:.4g} as given")
 say(f"{size_name} scene, case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches "
-    f"{w_low:g}/{w_up:g} um, height {H:g} um; centre-line speed {speed * 1e3:.3g} mm/s (reached "
-    f"{to_mm_s(reached):.4g} mm/s before the cells came, body force {force:.4g}), membranes {stiffness:.3g}x the paper's moduli; {to_ms(total_steps * time_step):g} ms of flow "
-    f"= {total_steps} steps, output every {to_ms(steps_per_output * time_step) * 1e3:g} us")
+    f"{w_low:g}/{w_up:g} um, height {H:g} um; {driving}, membranes {stiffness:.3g}x the paper's moduli; "
+    f"{to_ms(total_steps * time_step):g} ms of flow = {total_steps} steps, output every "
+    f"{to_ms(steps_per_output * time_step) * 1e3:g} us")
 
 # --- per-cell bookkeeping: rotation, passes round the periodic channel, branches
 for c in cells:  # the rotation angle of the node furthest downstream, about the centre
