@@ -205,7 +205,6 @@ def block(x0, x1, y0, y1, rounded=(), radius=None):
 
 
 island = (1.0 + w_low, L_Y - 1.0 - w_up)   # the branches' outer walls are 1 um thick
-island_middle = 0.5 * (island[0] + island[1])
 boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(H + 1.0)),
               block(0.0, split, 0.0, parent[0], rounded=("ur",)),          # parent, below
               block(0.0, split, parent[1], L_Y, rounded=("lr",)),          # parent, above
@@ -267,6 +266,19 @@ else:  # as given: the fluid starts at rest
     force, reached = args.force, float("nan")
 lbf.ext_force_density = [force, 0.0, 0.0]
 args.force = force  # (the test scenes read it back)
+island_middle = 0.5 * (island[0] + island[1])
+
+
+def lower_flow_share():
+    """The lower branch's share of the flow through the branches' middle
+    plane (x = 80 um): what a cell following the fluid would choose."""
+    i = int((0.5 * (split + join)) / agrid)
+    ux = lbf[i:i + 1, :, :].velocity[0, :, :, 0]
+    lower = (np.arange(ux.shape[0]) + 0.5) * agrid < island_middle
+    return float(ux[lower].sum() / ux.sum()) if ux.sum() > 0 else float("nan")
+
+
+flow_share = lower_flow_share() if math.isfinite(reached) else float("nan")
 
 # --- cells
 rbc_moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()})
@@ -338,6 +350,7 @@ volume0 = np.array([c.volume() for c in cells])
 surface0 = np.array([c.surface() for c in cells])
 centre_previous = np.array([c.get_origin() for c in cells])
 entered = {}          # (cell, pass) -> branch
+drift = {"volume": 0.0, "surface": 0.0}  # largest relative change of a cell's, over the outputs
 time0 = system.time   # the cells are released now (the calibration run came before)
 
 
@@ -381,7 +394,8 @@ file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
     box_width_um=L_Y, height_um=H, parent_um=parent, split_um=split, join_um=join, island_um=island,
     branch_widths_um=(w_low, w_up), planes_um=[L(p) for p in PLANES], speed_mm_s=speed * 1e3,
     stiffness=stiffness, force=force, time_step_us=time_step, steps_per_output=steps_per_output,
-    outputs=n_outputs, fluid_volume_um3={k: float(v) for k, v in fluid_volume.items()}), indent=1) + "\n")
+    outputs=n_outputs, lower_flow_share=flow_share,
+    fluid_volume_um3={k: float(v) for k, v in fluid_volume.items()}), indent=1) + "\n")
 tables = dict(
     cells=Table("cells.csv", ["time_ms", "cell", "type", "x_um", "y_um", "z_um", "vx_mm_s", "vy_mm_s", "vz_mm_s",
                               "surface_um2", "volume_um3", "diameter_um", "rotation_deg", "pass"]),
@@ -405,10 +419,12 @@ def record():
         x, y, z = np.mod(centre, system.box_l)
         lap = int(math.floor(centre[0] / L_X))
         velocity = c.get_velocity()
-        volume = c.volume()
+        volume, surface = c.volume(), c.surface()
+        drift["volume"] = max(drift["volume"], abs(volume / volume0[k] - 1.0))
+        drift["surface"] = max(drift["surface"], abs(surface / surface0[k] - 1.0))
         cell_volume[region_of(x, y)] += volume
         tables["cells"].row(t, k, c.particle_type, float(x), float(y), float(z),
-                            *(float(to_mm_s(v)) for v in velocity), float(c.surface()), float(volume),
+                            *(float(to_mm_s(v)) for v in velocity), float(surface), float(volume),
                             float(c.diameter()), float(math.degrees(c.get_rotation_angles()[0])), lap)
         if split + 8.0 < x < join and (k, lap) not in entered:
             entered[k, lap] = region_of(x, y)
@@ -491,10 +507,10 @@ else:
     p = counts["lower"] / n
     error = math.sqrt(p * (1.0 - p) / n)  # binomial standard error, entries taken as independent
     say(f"share of the {n} branch entries: lower (width {w_low:g} um) {p:.2f} +- {error:.2f}, "
-        f"upper (width {w_up:g} um) {1 - p:.2f} +- {error:.2f}")
-volume_drift = np.abs(np.array([c.volume() for c in cells]) / volume0 - 1.0).max()
-surface_drift = np.abs(np.array([c.surface() for c in cells]) / surface0 - 1.0).max()
-say(f"largest change of a cell's volume {100 * volume_drift:.2f} %, of its surface {100 * surface_drift:.2f} %")
+        f"upper (width {w_up:g} um) {1 - p:.2f} +- {error:.2f}"
+        + (f"; share of the flow: lower {flow_share:.2f}" if math.isfinite(flow_share) else ""))
+say(f"largest change of a cell's volume during the run {100 * drift['volume']:.2f} %, of its surface "
+    f"{100 * drift['surface']:.2f} %")
 # where the time went (wall clock by phase of the step), as after a LAMMPS run
 say(system.integrator.timing_report())
 if rank0 and not args.no_plots:

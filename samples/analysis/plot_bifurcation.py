@@ -142,7 +142,12 @@ def figure3(runs, plt):
         ax.text(0.5, 0.5, "no RBC entered a branch yet", ha="center", transform=ax.transAxes)
     ax.bar([0, 1], [p, 1 - p], yerr=[error, error], capsize=6, color=["tab:blue", "tab:orange"], alpha=0.7,
            label=f"all runs: {n} entries")
-    ax.axhline(w_low / (w_low + w_up), color="k", ls=":", label="share of the width")
+    flow = [run["scene"].get("lower_flow_share") for run in runs]
+    flow = [f for f in flow if f is not None and math.isfinite(f)]
+    if flow:  # what cells following the fluid would do (before the cells came)
+        ax.plot([-0.4, 0.4], [np.mean(flow)] * 2, "k--", label="share of the flow")
+        ax.plot([0.6, 1.4], [1 - np.mean(flow)] * 2, "k--")
+    ax.axhline(w_low / (w_low + w_up), color="k", ls=":", label="share of the width (lower)")
     ax.set_xticks([0, 1], [f"lower ({w_low:g} um)", f"upper ({w_up:g} um)"])
     ax.set_ylim(0, 1)
     ax.set_ylabel("share of RBC branch entries")

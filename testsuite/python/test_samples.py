@@ -104,6 +104,17 @@ class Samples(unittest.TestCase):
                         * (scene["channel_length_um"] - scene["join_um"] + scene["split_um"]))
         self.assertAlmostEqual(float(h[0]["parent"]), volume / parent_fluid, delta=0.1 * volume / parent_fluid)
         self.assertEqual((float(h[0]["lower"]), float(h[0]["upper"])), (0.0, 0.0))
+        # the fluid splits between the branches (measured before the cells
+        # came) as two rectangular ducts of equal length at equal pressure
+        # drop do: Q ~ w h^3 (1 - 192 h / (pi^5 w) sum_odd tanh(n pi w / 2h) / n^5)
+        # (h <= w; e.g. F. M. White, Viscous Fluid Flow), 0.201 for 10 x 14
+        # against 20 x 14 um; within 10 % (the rounded ends, the junctions)
+        def duct(a, b):
+            h, w = min(a, b), max(a, b)
+            series = sum(np.tanh(n * np.pi * w / (2 * h)) / n**5 for n in range(1, 40, 2))
+            return w * h**3 * (1 - 192 * h / (np.pi**5 * w) * series)
+        q_low, q_up = (duct(w, scene["height_um"]) for w in scene["branch_widths_um"])
+        self.assertAlmostEqual(scene["lower_flow_share"] / (q_low / (q_low + q_up)), 1.0, delta=0.1)
         self.assertIn("branch entries", out)
         self.assertIn("total (200 steps)", out)  # the timing report
         for number in (2, 3, 4, 5):  # the paper's figures, from plot_bifurcation.py
