@@ -55,7 +55,8 @@ an island with corners of 2 um folded around the corner and its nodes
 flew apart within a microsecond (at every membrane stiffness from the
 paper's to 27x, at time steps 0.1 and 0.05 us, with stronger walls too);
 on the semicircle it slides off into a branch. The membranes' nodes weigh
-gamma dt / 0.3 (see the cells' set-up; doc/study.md).
+gamma dt / 0.3 and the membranes have a small viscosity (see the
+constants and the cells' set-up; doc/study.md).
 """
 import argparse
 import csv

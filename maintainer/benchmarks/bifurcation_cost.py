@@ -27,7 +27,7 @@ import tempfile
 
 from benchmark_csv import write_rows
 
-PAPER_ONE_CORE = {0: 48.14, 40: 145.00}  # s per 1000 steps, Table 1
+PAPER_ONE_CORE = {0: 48.14, 5: 55.90, 10: 62.68, 20: 84.37, 40: 145.00, 60: 242.47}  # s per 1000 steps, Table 1
 STEPS_138_MS = 1_380_000
 
 
