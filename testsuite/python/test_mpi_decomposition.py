@@ -8,7 +8,6 @@ serially under CTest."""
 import os
 import shutil
 import subprocess
-import sys
 import tempfile
 import textwrap
 import unittest
