@@ -93,7 +93,7 @@ RBC_MEMBRANE = dict(shear_modulus=2.1651e-6,        # N/m
 # = 0.074, far below the RBC's measured 1e-7 N s/m (which the explicit time
 # step could not carry); it damps the nodes' relative motion. Without it a
 # cell jammed head-on at the island's apex, its neighbour pressing from
-# behind, was kicked apart by its own bending forces within 3 ms (case B;
+# behind, was kicked apart by its own membrane forces within 3 ms (case B;
 # kvisc 1 held the 8 ms). A viscosity: not scaled with the flow.
 MEMBRANE_VISCOSITY = 4.33e-10         # Pa s m (kvisc 1.0)
 RARE_STIFFNESS = 10.0                 # the rare cell's shear, bending, local area moduli / the RBC's
