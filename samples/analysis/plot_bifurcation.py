@@ -167,14 +167,11 @@ def figure4(runs, plt, max_cells=3):
     # RBCs through each branch (the narrow one first), most passes first
     rbc_ids = sorted({int(k) for k, t in zip(c["cell"], c["type"]) if t == 0})
     passes = {k: sum(1 for (kk, _) in branch_of if kk == k) for k in rbc_ids}
-    chosen = []
-    for name in ("lower", "upper", None):
-        for k in sorted(rbc_ids, key=lambda k: -passes[k]):
-            went = any(kk == k and b == name for (kk, _), b in branch_of.items()) if name else True
-            if went and k not in chosen and len(chosen) < (1 if name == "lower" else max_cells):
-                chosen.append(k)
-                if name == "lower":
-                    break
+    ranked = sorted(rbc_ids, key=lambda k: -passes[k])
+    went = lambda k, name: any(kk == k and b == name for (kk, _), b in branch_of.items())  # noqa: E731
+    chosen = [k for k in ranked if went(k, "lower")][:1]
+    chosen += [k for k in ranked if went(k, "upper") and k not in chosen]
+    chosen = (chosen + [k for k in ranked if k not in chosen])[:max_cells]
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     colours = {"lower": "tab:blue", "upper": "tab:orange", None: "0.6"}
     styles = ["-", "--", ":", "-."]
@@ -228,13 +225,14 @@ def figure5(runs, plt, window_ms=None):
     return fig
 
 
-def make_figures(folders, output=None, window_ms=None, bins=20):
-    """Read the runs in `folders`, write the four PNGs into `output`
-    (default: the first folder); returns their paths."""
+def make_figures(folders, output=None, window_ms=None, bins=20, runs=None):
+    """Read the runs in `folders` (or take them as read, `runs`), write the
+    four PNGs into `output` (default: the first folder); returns their
+    paths."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs = [read_run(f) for f in folders]
+    runs = runs or [read_run(f) for f in folders]
     check_same_scene(runs)
     output = output or folders[0]
     os.makedirs(output, exist_ok=True)
@@ -259,9 +257,9 @@ def main(argv=None):
         ap.error(f"--window must be a positive number of ms, got {args.window}")
     if args.bins < 1:
         ap.error(f"--bins must be at least 1, got {args.bins}")
-    for path in make_figures(args.folders, args.output, args.window, args.bins):
-        print(path)
     runs = [read_run(f) for f in args.folders]
+    for path in make_figures(args.folders, args.output, args.window, args.bins, runs=runs):
+        print(path)
     lower, upper = np.sum([branch_counts(r) for r in runs], axis=0)
     p, error = share_with_error(int(lower), int(upper))
     print(f"RBC branch entries over {len(runs)} run(s): lower {lower}, upper {upper}; share lower "

@@ -293,35 +293,27 @@ def plot(rows, series, path):
     d_all = np.array([r["diameter"] for r in rows])
     dd = np.linspace(min(8.0, d_all.min()), max(30.0, d_all.max() + 5.0), 200)
     hds = sorted({round(r["H_D"], 2) for r in rows})
-    ax = axes[0]
-    for h in sorted(set([0.15, 0.30, 0.45] + hds)):
-        style = "-" if h in hds else ":"
-        ax.plot(dd, pries_viscosity(dd, h), style, color="0.4" if h in hds else "0.7", lw=1.0)
-        ax.annotate(f"H_D {h:.2f}", (dd[-1], float(pries_viscosity(dd[-1], h))), fontsize=7, ha="right",
-                    va="bottom")
-    ax.errorbar(d_all, [r["eta_rel"] for r in rows], yerr=[r["eta_rel_err"] for r in rows], fmt="o",
-                color="tab:red", label="PyOIF")
-    ax.plot(d_all, [r["eta_rel_pries"] for r in rows], "x", color="k", ms=8,
-            label="Pries 1992 at the measured H_D")
-    ax.set_xlabel("tube diameter D (µm)")
-    ax.set_ylabel("relative apparent viscosity η_rel")
-    ax.set_title("Fåhræus–Lindqvist (Pries et al. 1992, in vitro)", fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
-    ax = axes[1]
-    for h in sorted(set([0.15, 0.45] + hds)):
-        style = "-" if h in hds else ":"
-        ax.plot(dd, pries_ht_over_hd(dd, h), style, color="0.4" if h in hds else "0.7", lw=1.0)
-        ax.annotate(f"H_D {h:.2f}", (dd[-1], float(pries_ht_over_hd(dd[-1], h))), fontsize=7, ha="right",
-                    va="bottom")
-    ax.errorbar(d_all, [r["HT_over_HD"] for r in rows],
-                yerr=[r["HT_over_HD"] * r["H_D_err"] / r["H_D"] for r in rows], fmt="o", color="tab:red",
-                label="PyOIF")
-    ax.plot(d_all, [r["HT_over_HD_pries"] for r in rows], "x", color="k", ms=8,
-            label="Pries 1990 at the measured H_D")
-    ax.set_xlabel("tube diameter D (µm)")
-    ax.set_ylabel("H_T / H_D")
-    ax.set_title("Fåhræus effect (Pries et al. 1990)", fontsize=9)
-    ax.legend(fontsize=7, loc="lower right")
+
+    def pries_panel(ax, fit, fit_hds, ours, errors, pries_key, label, ylabel, title, legend_at):
+        """The fit's curves at several H_D (solid at the measured ones), ours
+        with error bars and the fit at our H_D."""
+        for h in sorted(set(fit_hds + hds)):
+            style = "-" if h in hds else ":"
+            ax.plot(dd, fit(dd, h), style, color="0.4" if h in hds else "0.7", lw=1.0)
+            ax.annotate(f"H_D {h:.2f}", (dd[-1], float(fit(dd[-1], h))), fontsize=7, ha="right", va="bottom")
+        ax.errorbar(d_all, ours, yerr=errors, fmt="o", color="tab:red", label="PyOIF")
+        ax.plot(d_all, [r[pries_key] for r in rows], "x", color="k", ms=8, label=label)
+        ax.set_xlabel("tube diameter D (µm)")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7, loc=legend_at)
+
+    pries_panel(axes[0], pries_viscosity, [0.15, 0.30, 0.45], [r["eta_rel"] for r in rows],
+                [r["eta_rel_err"] for r in rows], "eta_rel_pries", "Pries 1992 at the measured H_D",
+                "relative apparent viscosity η_rel", "Fåhræus–Lindqvist (Pries et al. 1992, in vitro)", "upper left")
+    pries_panel(axes[1], pries_ht_over_hd, [0.15, 0.45], [r["HT_over_HD"] for r in rows],
+                [r["HT_over_HD"] * r["H_D_err"] / r["H_D"] for r in rows], "HT_over_HD_pries",
+                "Pries 1990 at the measured H_D", "H_T / H_D", "Fåhræus effect (Pries et al. 1990)", "lower right")
     ax = axes[2]
     for r in rows:
         s = [q for q in series if q["diameter"] == r["diameter"] and q.get("Ca", r["Ca"]) == r["Ca"]]

@@ -3,7 +3,6 @@ short runs: cells carried downstream by the flow, volumes held by the
 membrane moduli, output files ParaView and plotting scripts read. (Before
 this test nothing ran the samples, and a rule change once broke the
 flagship's --rare and --full modes unnoticed.)"""
-import csv
 import json
 import os
 import sys
@@ -12,7 +11,7 @@ import unittest
 
 import numpy as np
 
-from testsuite_data import BUILD, run_sample
+from testsuite_data import BUILD, run_sample, read_csv
 
 
 def table_rows(stdout):
@@ -149,10 +148,6 @@ class Samples(unittest.TestCase):
         self.assertEqual(len({row["type"] for row in table}), 2)
         self.assertFalse(any(name.endswith(".png") for name in os.listdir(rare)))  # --no-plots
 
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 if __name__ == "__main__":

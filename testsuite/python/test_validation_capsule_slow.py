@@ -24,22 +24,17 @@ friction), D growing with the friction, the inclination angle near 45 deg
 within 1 %, and the documented bias of the default coupling
 (suggest_LBgamma alone): D 0.60-0.80 of the theory (measured 0.69).
 About 65 CPU s: hence _slow (ctest label slow)."""
-import csv
 import os
 import sys
 import tempfile
 import unittest
 
-from testsuite_data import BUILD, SOURCE, run_sample
+from testsuite_data import BUILD, SOURCE, run_sample, read_csv
 
 SAMPLE = "validation/capsule_shear.py"  # under samples/
 TOLERANCE = 0.10  # relative, on the no-slip limit of D (the issue's 10 %)
 CAPILLARY_NUMBERS = (0.0125, 0.025, 0.05)
 
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 @unittest.skipUnless(os.path.isfile(os.path.join(BUILD, "pyoif")),

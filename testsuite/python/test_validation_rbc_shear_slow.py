@@ -25,7 +25,6 @@ documented behaviour. Also asserted: f / rate falling with the stress (as
 in the experiment), below the sphere's 1/(4 pi); the mean inclination
 angle 5-20 deg (measured 9.5-11.7; the experiment's cells 7-17 deg); the
 volume within 1 %. About 90 CPU s: hence _slow (ctest label slow)."""
-import csv
 import math
 import os
 import sys
@@ -34,7 +33,7 @@ import unittest
 
 import numpy as np
 
-from testsuite_data import BUILD, SOURCE, run_sample
+from testsuite_data import BUILD, SOURCE, run_sample, read_csv
 
 SAMPLE = "validation/rbc_shear.py"  # under samples/
 RATES = (326, 624, 1256, 2535)      # 1/s: the experiment's stresses 0.49-3.80 Pa in plasma
@@ -42,10 +41,6 @@ TANK_TREADING = (624, 1256, 2535)
 TUMBLING = (326,)
 SD_TOLERANCE = 2.0                  # standard deviations of the cell-to-cell scatter
 
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 def sample_module():

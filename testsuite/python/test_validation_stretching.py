@@ -17,7 +17,6 @@ experiment's drops steeply at low force: up to 0.08 um above the range at
 scatter (the axial diameter 0.9-1.3 um under the mean above 100 pN).
 At 0 pN both diameters equal the relaxed cell's within 1e-3 um.
 rbc374 takes about 5 CPU s, rbc642 about 9, rbc1002 about 13."""
-import csv
 import os
 import tempfile
 import unittest
@@ -25,16 +24,12 @@ import unittest
 import lbmd
 import oif
 
-from testsuite_data import BUILD, SOURCE, run_sample
+from testsuite_data import BUILD, SOURCE, run_sample, read_csv
 
 SAMPLE = "validation/rbc_stretching.py"  # under samples/
 DATA = os.path.join(SOURCE, "samples", "validation", "data", "mills2004_stretching.csv")
 MARGIN = 0.1  # um, see the module docstring
 
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
 def relaxed_diameters(mesh):

@@ -2,7 +2,8 @@
 meshes and their provenance in testsuite/data/meshes/README.md). CTest sets
 PYOIF_TEST_DATA; a test run by hand finds the folder beside this file.
 Also where the sources and the build are (PYOIF_SOURCE_DIR, PYOIF_BUILD_DIR)
-and `run_sample`, which the tests of the samples share."""
+and `run_sample` and `read_csv`, which the tests of the samples share."""
+import csv
 import os
 import subprocess
 
@@ -24,3 +25,10 @@ def run_sample(name, *args, cwd, timeout=600):
         raise AssertionError(f"{name} {' '.join(args)} exited with {proc.returncode}:\n"
                              f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
     return proc.stdout
+
+
+def read_csv(path):
+    """The rows of a CSV file as dicts (header line first; lines starting
+    with '#', a data file's provenance, skipped)."""
+    with open(path) as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
