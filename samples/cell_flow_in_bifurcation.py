@@ -146,6 +146,14 @@ def parse_arguments(argv=None):
     ap.add_argument("--no-plots", action="store_true", help="do not make the PNG figures at the end")
     ap.add_argument("--progress", choices=("auto", "bar", "lines", "off"), default="auto",
                     help="progress bar (auto: on a terminal), a line per output, or nothing")
+    ap.add_argument("--checkpoint", default=None,
+                    help="checkpoint file (default DIR/checkpoint.h5): written on SIGTERM or SIGUSR1 (then the "
+                         "run exits with status 75), every --checkpoint-every ms, and read by --resume")
+    ap.add_argument("--checkpoint-every", type=float, default=None,
+                    help="write a checkpoint every this many ms of flow (full: 10; small: only on a signal)")
+    ap.add_argument("--resume", action="store_true",
+                    help="continue the run from its checkpoint (the scene options are the checkpoint's; "
+                         "--output, --progress, --no-plots, --checkpoint and --checkpoint-every may change)")
     expert = ap.add_argument_group("lattice units (benchmarks, tests)")
     expert.add_argument("--cycles", type=int, default=None, help="number of outputs (instead of --duration)")
     expert.add_argument("--steps", type=int, default=None, help="MD steps between outputs (instead of --output-every)")
@@ -158,7 +166,7 @@ def parse_arguments(argv=None):
         value = getattr(args, name)
         if value is not None and value < (0 if name in ("cells", "cycles") else 1):
             ap.error(f"--{name} must be {'>= 0' if name != 'steps' else '>= 1'}, got {value}")
-    for name in ("duration", "output_every", "speed", "height", "force", "stiffness"):
+    for name in ("duration", "output_every", "speed", "height", "force", "stiffness", "checkpoint_every"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             ap.error(f"--{name.replace('_', '-')} must be a positive number, got {value}")
@@ -166,6 +174,14 @@ def parse_arguments(argv=None):
 
 
 args = parse_arguments()
+checkpoint_path = args.checkpoint or os.path.join(args.output, "checkpoint.h5")
+resumed = None
+if args.resume:  # the scene, the cells and this script's bookkeeping as the checkpoint left them
+    resumed = lbmd.checkpoint.load(checkpoint_path)
+    kept = {k: getattr(args, k) for k in ("output", "progress", "no_plots", "checkpoint", "checkpoint_every",
+                                          "resume")}
+    args = resumed.state["args"]
+    args.__dict__.update(kept)
 size_name = "full" if args.full else "small"
 size = SIZES[size_name]
 n_rbc = args.cells if args.cells is not None else size["cells"]
@@ -187,153 +203,158 @@ H = L(height)
 L_X, L_Y, H_BOX = L(CHANNEL_LENGTH), L(BOX_WIDTH), H + 2.0  # a wall one node thick below and above
 w_low, w_up = (L(w) for w in CASES[args.case])
 split, join, parent, r_corner = L(SPLIT), L(JOIN), tuple(L(p) for p in PARENT), L(CORNER_RADIUS)
-system = lbmd.System(box_l=[L_X, L_Y, H_BOX])
-system.time_step = time_step
-system.cell_system.skin = 0.3
-
-
-def block(x0, x1, y0, y1, rounded=(), radius=None):
-    """Rectangle [x0, x1] x [y0, y1] over the box height, its corners named in
-    `rounded` ('ll', 'lr', 'ul', 'ur': lower/upper, left/right) rounded: a
-    union of two overlapping bars, a square at each sharp corner and a
-    cylinder at each rounded one."""
-    r = radius or r_corner
-    box = lambda a0, a1, b0, b1: shapes.Rhomboid(corner=[a0, b0, 0.0], a=[a1 - a0, 0, 0], b=[0, b1 - b0, 0],  # noqa
-                                                  c=[0, 0, H_BOX], direction=1)
-    parts = [box(x0 + r, x1 - r, y0, y1), box(x0, x1, y0 + r, y1 - r)]
-    for name, (cx, cy, sx, sy) in {"ll": (x0, y0, 1, 1), "lr": (x1, y0, -1, 1),
-                                   "ul": (x0, y1, 1, -1), "ur": (x1, y1, -1, -1)}.items():
-        if name in rounded:
-            parts.append(shapes.Cylinder(center=[cx + sx * r, cy + sy * r, 0.5 * H_BOX], axis=[0, 0, 1],
-                                         radius=r, length=H_BOX))
-        else:
-            parts.append(box(min(cx, cx + sx * r), max(cx, cx + sx * r), min(cy, cy + sy * r),
-                             max(cy, cy + sy * r)))
-    return shapes.Union(shapes=parts)
-
-
 island = (1.0 + w_low, L_Y - 1.0 - w_up)   # the branches' outer walls are 1 um thick
-boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(H + 1.0)),
-              block(0.0, split, 0.0, parent[0], rounded=("ur",)),          # parent, below
-              block(0.0, split, parent[1], L_Y, rounded=("lr",)),          # parent, above
-              block(join, L_X, 0.0, parent[0], rounded=("ul",)),           # outlet, below
-              block(join, L_X, parent[1], L_Y, rounded=("ll",)),           # outlet, above
-              shapes.Rhomboid(corner=[split - 1.0, 0.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
-                              c=[0, 0, H_BOX]),                            # branch outer walls
-              shapes.Rhomboid(corner=[split - 1.0, L_Y - 1.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
-                              c=[0, 0, H_BOX]),
-              block(split, join, island[0], island[1], rounded=("ll", "lr", "ul", "ur"),
-                    radius=0.4999 * (island[1] - island[0]))]  # island, its ends semicircles
-
-# --- fluid, driven to the centre-line speed
-visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
-dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
-lbf = lb.LBFluid(agrid=agrid, dens=dens, visc=visc, tau=tau, ext_force_density=[0.0, 0.0, 0.0])
-system.actors.add(lbf)
-for b in boundaries:
-    system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
-    system.constraints.add(shape=b, particle_type=10, penetrable=False)
-probe = [0.5 * split, 0.5 * (parent[0] + parent[1]), 1.0 + 0.5 * H]  # centre line of the parent channel
-
-
-def settle():
-    """Run the fluid until the probe's speed changes by less than 0.1 % over
-    50 us (at least 100 us); returns that speed."""
-    chunk = max(1, int(round(50.0 / time_step)))
-    system.integrator.run(2 * chunk)
-    previous = lbf.get_interpolated_velocity(probe)[0]
-    for _ in range(40):
-        system.integrator.run(chunk)
-        u = lbf.get_interpolated_velocity(probe)[0]
-        if abs(u - previous) < 1e-3 * abs(u):
-            break
-        previous = u
-    return u
-
-
-def drive_flow(target):
-    """The body force density giving the centre-line speed `target` at the
-    probe, by fluid-only runs: Stokes flow is linear in the force, so a run
-    to steady state with a trial force (plane Poiseuille flow between the
-    walls, 8 eta u / H^2, times 1.5 for the side walls) scales it, and a
-    second run checks it (inertia at Reynolds numbers near 1 bends the
-    line a little). Returns the force and the speed reached."""
-    force = 1.5 * 8.0 * visc * dens * target / H**2
-    for attempt in range(3):
-        lbf.ext_force_density = [force, 0.0, 0.0]
-        reached = settle()
-        if abs(reached - target) < 2e-3 * target or attempt == 2:
-            return force, reached
-        force *= target / reached
-
-
-target_speed = UNITS.to_lattice(speed, "m/s")
-if args.force is None:
-    force, reached = drive_flow(target_speed)
-else:  # as given: the fluid starts at rest
-    force, reached = args.force, float("nan")
-lbf.ext_force_density = [force, 0.0, 0.0]
-args.force = force  # (the test scenes read it back)
 island_middle = 0.5 * (island[0] + island[1])
 
-
-def lower_flow_share():
-    """The lower branch's share of the flow through the branches' middle
-    plane (x = 80 um): what a cell following the fluid would choose."""
-    i = int((0.5 * (split + join)) / agrid)
-    ux = lbf[i:i + 1, :, :].velocity[0, :, :, 0]
-    lower = (np.arange(ux.shape[0]) + 0.5) * agrid < island_middle
-    return float(ux[lower].sum() / ux.sum()) if ux.sum() > 0 else float("nan")
+if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
+    system = lbmd.System(box_l=[L_X, L_Y, H_BOX])
+    system.time_step = time_step
+    system.cell_system.skin = 0.3
 
 
-flow_share = lower_flow_share() if math.isfinite(reached) else float("nan")
+    def block(x0, x1, y0, y1, rounded=(), radius=None):
+        """Rectangle [x0, x1] x [y0, y1] over the box height, its corners named in
+        `rounded` ('ll', 'lr', 'ul', 'ur': lower/upper, left/right) rounded: a
+        union of two overlapping bars, a square at each sharp corner and a
+        cylinder at each rounded one."""
+        r = radius or r_corner
+        box = lambda a0, a1, b0, b1: shapes.Rhomboid(corner=[a0, b0, 0.0], a=[a1 - a0, 0, 0], b=[0, b1 - b0, 0],  # noqa
+                                                      c=[0, 0, H_BOX], direction=1)
+        parts = [box(x0 + r, x1 - r, y0, y1), box(x0, x1, y0 + r, y1 - r)]
+        for name, (cx, cy, sx, sy) in {"ll": (x0, y0, 1, 1), "lr": (x1, y0, -1, 1),
+                                       "ul": (x0, y1, 1, -1), "ur": (x1, y1, -1, -1)}.items():
+            if name in rounded:
+                parts.append(shapes.Cylinder(center=[cx + sx * r, cy + sy * r, 0.5 * H_BOX], axis=[0, 0, 1],
+                                             radius=r, length=H_BOX))
+            else:
+                parts.append(box(min(cx, cx + sx * r), max(cx, cx + sx * r), min(cy, cy + sy * r),
+                                 max(cy, cy + sy * r)))
+        return shapes.Union(shapes=parts)
 
-# --- cells
-rbc_moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()},
-                                membrane_viscosity=MEMBRANE_VISCOSITY)
-rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3, normal=True,
-                      **rbc_moduli)
-types, counts, ptypes = [rbc], [n_rbc], [0]
-if rare:
-    rare_moduli = dict(rbc_moduli)
-    for k in ("ks", "kb", "kal"):
-        rare_moduli[k] *= min(RARE_STIFFNESS, STIFFEST / stiffness)
-    rare_type = oif.OifCellType(*oif.mesh_files("sphere642"), system=system, resize=(L(size["rare_radius"]),) * 3,
-                                normal=True, **rare_moduli)
-    types.append(rare_type)
-    counts.append(1)
-    ptypes.append(1)
-# at random in the parent channel (just upstream of the split; more than 12
-# cells need the whole parent channel, i.e. also the outlet, which leads
-# into the inlet)
-region = ([split - 30.0, parent[0], 1.0], [split - 3.0, parent[1], H + 1.0])
-seeding_boundaries = boundaries
-if n_rbc > 12:
-    region = ([0.0, parent[0], 1.0], [L_X, parent[1], H + 1.0])
-    seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[split - 3.0, 0.0, 0.0], a=[join - split + 6.0, 0, 0],
-                                                       b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
-if n_rbc > 40:  # the paper's 60 do not fit there at random: the branches too (not counted as entries)
-    region = ([0.0, 0.0, 1.0], [L_X, L_Y, H + 1.0])
+
+    boundaries = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(H + 1.0)),
+                  block(0.0, split, 0.0, parent[0], rounded=("ur",)),          # parent, below
+                  block(0.0, split, parent[1], L_Y, rounded=("lr",)),          # parent, above
+                  block(join, L_X, 0.0, parent[0], rounded=("ul",)),           # outlet, below
+                  block(join, L_X, parent[1], L_Y, rounded=("ll",)),           # outlet, above
+                  shapes.Rhomboid(corner=[split - 1.0, 0.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
+                                  c=[0, 0, H_BOX]),                            # branch outer walls
+                  shapes.Rhomboid(corner=[split - 1.0, L_Y - 1.0, 0.0], a=[join - split + 2.0, 0, 0], b=[0, 1.0, 0],
+                                  c=[0, 0, H_BOX]),
+                  block(split, join, island[0], island[1], rounded=("ll", "lr", "ul", "ur"),
+                        radius=0.4999 * (island[1] - island[0]))]  # island, its ends semicircles
+
+    # --- fluid, driven to the centre-line speed
+    visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
+    dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
+    lbf = lb.LBFluid(agrid=agrid, dens=dens, visc=visc, tau=tau, ext_force_density=[0.0, 0.0, 0.0])
+    system.actors.add(lbf)
+    for b in boundaries:
+        system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
+        system.constraints.add(shape=b, particle_type=10, penetrable=False)
+    probe = [0.5 * split, 0.5 * (parent[0] + parent[1]), 1.0 + 0.5 * H]  # centre line of the parent channel
+
+
+    def settle():
+        """Run the fluid until the probe's speed changes by less than 0.1 % over
+        50 us (at least 100 us); returns that speed."""
+        chunk = max(1, int(round(50.0 / time_step)))
+        system.integrator.run(2 * chunk)
+        previous = lbf.get_interpolated_velocity(probe)[0]
+        for _ in range(40):
+            system.integrator.run(chunk)
+            u = lbf.get_interpolated_velocity(probe)[0]
+            if abs(u - previous) < 1e-3 * abs(u):
+                break
+            previous = u
+        return u
+
+
+    def drive_flow(target):
+        """The body force density giving the centre-line speed `target` at the
+        probe, by fluid-only runs: Stokes flow is linear in the force, so a run
+        to steady state with a trial force (plane Poiseuille flow between the
+        walls, 8 eta u / H^2, times 1.5 for the side walls) scales it, and a
+        second run checks it (inertia at Reynolds numbers near 1 bends the
+        line a little). Returns the force and the speed reached."""
+        force = 1.5 * 8.0 * visc * dens * target / H**2
+        for attempt in range(3):
+            lbf.ext_force_density = [force, 0.0, 0.0]
+            reached = settle()
+            if abs(reached - target) < 2e-3 * target or attempt == 2:
+                return force, reached
+            force *= target / reached
+
+
+    target_speed = UNITS.to_lattice(speed, "m/s")
+    if args.force is None:
+        force, reached = drive_flow(target_speed)
+    else:  # as given: the fluid starts at rest
+        force, reached = args.force, float("nan")
+    lbf.ext_force_density = [force, 0.0, 0.0]
+    args.force = force  # (the test scenes read it back)
+
+
+    def lower_flow_share():
+        """The lower branch's share of the flow through the branches' middle
+        plane (x = 80 um): what a cell following the fluid would choose."""
+        i = int((0.5 * (split + join)) / agrid)
+        ux = lbf[i:i + 1, :, :].velocity[0, :, :, 0]
+        lower = (np.arange(ux.shape[0]) + 0.5) * agrid < island_middle
+        return float(ux[lower].sum() / ux.sum()) if ux.sum() > 0 else float("nan")
+
+
+    flow_share = lower_flow_share() if math.isfinite(reached) else float("nan")
+
+    # --- cells
+    rbc_moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()},
+                                    membrane_viscosity=MEMBRANE_VISCOSITY)
+    rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3, normal=True,
+                          **rbc_moduli)
+    types, counts, ptypes = [rbc], [n_rbc], [0]
+    if rare:
+        rare_moduli = dict(rbc_moduli)
+        for k in ("ks", "kb", "kal"):
+            rare_moduli[k] *= min(RARE_STIFFNESS, STIFFEST / stiffness)
+        rare_type = oif.OifCellType(*oif.mesh_files("sphere642"), system=system, resize=(L(size["rare_radius"]),) * 3,
+                                    normal=True, **rare_moduli)
+        types.append(rare_type)
+        counts.append(1)
+        ptypes.append(1)
+    # at random in the parent channel (just upstream of the split; more than 12
+    # cells need the whole parent channel, i.e. also the outlet, which leads
+    # into the inlet)
+    region = ([split - 30.0, parent[0], 1.0], [split - 3.0, parent[1], H + 1.0])
     seeding_boundaries = boundaries
-# the coupling's friction per node, and the node mass at gamma dt / m = 0.3:
-# the friction relaxes a node's velocity to the fluid's within a few steps.
-# With heavier nodes (gamma dt / m 0.04-0.18; mass 1 here gives 0.15) the
-# membranes of cells jammed at the island's apex folded through
-# themselves within a few ms at every stiffness tried, as the RBC in shear
-# flow did (doc/validation.md); the physical mass of a node, 27 pg / 374 =
-# 0.07 in these units, is lighter still and needs no other change
-gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
-node_mass = gamma * time_step / 0.3
-cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
-                       particle_types=ptypes, seed=args.seed, particle_mass=node_mass)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
-for t in set(ptypes):
-    system.non_bonded_inter[t, 10].soft_sphere.set_params(
-        a=WALL_CONTACT["a"], n=WALL_CONTACT["n"], cutoff=WALL_CONTACT["cutoff"], offset=0.0)
-    for u in set(ptypes):
-        if u >= t:
-            system.non_bonded_inter[t, u].membrane_collision.set_params(
-                a=CELL_CONTACT["a"], n=CELL_CONTACT["n"], cutoff=CELL_CONTACT["cutoff"], offset=0.0)
+    if n_rbc > 12:
+        region = ([0.0, parent[0], 1.0], [L_X, parent[1], H + 1.0])
+        seeding_boundaries = boundaries + [shapes.Rhomboid(corner=[split - 3.0, 0.0, 0.0], a=[join - split + 6.0, 0, 0],
+                                                           b=[0, L_Y, 0], c=[0, 0, H_BOX])]  # not in the branches
+    if n_rbc > 40:  # the paper's 60 do not fit there at random: the branches too (not counted as entries)
+        region = ([0.0, 0.0, 1.0], [L_X, L_Y, H + 1.0])
+        seeding_boundaries = boundaries
+    # the coupling's friction per node, and the node mass at gamma dt / m = 0.3:
+    # the friction relaxes a node's velocity to the fluid's within a few steps.
+    # With heavier nodes (gamma dt / m 0.04-0.18; mass 1 here gives 0.15) the
+    # membranes of cells jammed at the island's apex folded through
+    # themselves within a few ms at every stiffness tried, as the RBC in shear
+    # flow did (doc/validation.md); the physical mass of a node, 27 pg / 374 =
+    # 0.07 in these units, is lighter still and needs no other change
+    gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
+    node_mass = gamma * time_step / 0.3
+    cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
+                           particle_types=ptypes, seed=args.seed, particle_mass=node_mass)
+    system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
+    for t in set(ptypes):
+        system.non_bonded_inter[t, 10].soft_sphere.set_params(
+            a=WALL_CONTACT["a"], n=WALL_CONTACT["n"], cutoff=WALL_CONTACT["cutoff"], offset=0.0)
+        for u in set(ptypes):
+            if u >= t:
+                system.non_bonded_inter[t, u].membrane_collision.set_params(
+                    a=CELL_CONTACT["a"], n=CELL_CONTACT["n"], cutoff=CELL_CONTACT["cutoff"], offset=0.0)
+else:
+    system, lbf, cells = resumed.system, resumed.lbf, resumed.cells
+    force, reached, flow_share = (resumed.state[k] for k in ("force", "reached", "flow_share"))
 
 # --- output schedule
 steps_per_output = args.steps or max(1, int(round(UNITS.to_lattice(
@@ -350,24 +371,33 @@ to_mm_s = lambda v: UNITS.to_si(v, "m/s") * 1e3  # noqa: E731
 driving = (f"centre-line speed {speed * 1e3:.3g} mm/s (reached {to_mm_s(reached):.4g} mm/s before the cells "
            f"came, body force {force:.4g})" if math.isfinite(reached)
            else f"body force {force:.4g} as given")
+if resumed is not None:
+    say(f"resumed from {checkpoint_path} at {to_ms(system.time - resumed.state['time0']):.4g} ms of flow "
+        f"(step {system.step_count})")
 say(f"{size_name} scene, case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches "
     f"{w_low:g}/{w_up:g} um, height {H:g} um; {driving}, membranes {stiffness:.3g}x the paper's moduli; "
     f"{to_ms(total_steps * time_step):g} ms of flow = {total_steps} steps, output every "
     f"{to_ms(steps_per_output * time_step) * 1e3:g} us")
 
 # --- per-cell bookkeeping: rotation, passes round the periodic channel, branches
-for c in cells:  # the rotation angle of the node furthest downstream, about the centre
-    c.set_rotation(ids=[int(np.argmax(c.mesh.positions()[:, 0]))])
-volume0 = np.array([c.volume() for c in cells])
-surface0 = np.array([c.surface() for c in cells])
-centre_previous = np.array([c.get_origin() for c in cells])
-entered = {}          # (cell, pass) -> branch ("seeded": placed in a branch at the start, not an entry)
-drift = {"volume": 0.0, "surface": 0.0}  # largest relative change of a cell's, over the outputs
-time0 = system.time   # the cells are released now (the calibration run came before)
-for k, c in enumerate(cells):
-    x0, y0, _ = np.mod(c.get_origin(), system.box_l)
-    if split <= x0 < join:
-        entered[k, int(math.floor(c.get_origin()[0] / L_X))] = "seeded"
+if resumed is None:
+    for c in cells:  # the rotation angle of the node furthest downstream, about the centre
+        c.set_rotation(ids=[int(np.argmax(c.mesh.positions()[:, 0]))])
+    volume0 = np.array([c.volume() for c in cells])
+    surface0 = np.array([c.surface() for c in cells])
+    centre_previous = np.array([c.get_origin() for c in cells])
+    entered = {}          # (cell, pass) -> branch ("seeded": placed in a branch at the start, not an entry)
+    drift = {"volume": 0.0, "surface": 0.0}  # largest relative change of a cell's, over the outputs
+    time0 = system.time   # the cells are released now (the calibration run came before)
+    release_step = system.step_count
+    outputs_done = 0
+    for k, c in enumerate(cells):
+        x0, y0, _ = np.mod(c.get_origin(), system.box_l)
+        if split <= x0 < join:
+            entered[k, int(math.floor(c.get_origin()[0] / L_X))] = "seeded"
+else:
+    globals().update({k: resumed.state[k] for k in ("volume0", "surface0", "centre_previous", "entered", "drift",
+                                                    "time0", "release_step", "outputs_done")})
 
 
 def region_of(x, y):
@@ -389,10 +419,19 @@ fluid_volume = {"parent": fluid_columns[~in_branches].sum(),
 
 class Table:
     """A CSV file written by rank 0 as the run goes (flushed every output:
-    a run that dies keeps its rows)."""
+    a run that dies keeps its rows). Resumed: the rows up to the
+    checkpoint's output are kept, later ones (of a run that went on after
+    it) cut off."""
 
     def __init__(self, name, header):
-        self.file = open(os.path.join(args.output, name) if rank0 else os.devnull, "w", newline="")
+        path = os.path.join(args.output, name) if rank0 else os.devnull
+        if resumed is not None and rank0:
+            self.file = open(path, "r+", newline="")
+            self.file.truncate(resumed.state["offsets"][name])
+            self.file.seek(0, os.SEEK_END)
+            self.writer = csv.writer(self.file)
+            return
+        self.file = open(path, "w", newline="")
         self.writer = csv.writer(self.file)
         self.writer.writerow(header)
 
@@ -405,7 +444,7 @@ class Table:
 
 os.makedirs(args.output, exist_ok=True)
 # the scene, for plot_bifurcation.py (which combines runs of one case)
-file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
+resumed is None and file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
     size=size_name, case=args.case, seed=args.seed, rbcs=n_rbc, rare=rare, channel_length_um=L_X,
     box_width_um=L_Y, height_um=H, parent_um=parent, split_um=split, join_um=join, island_um=island,
     branch_widths_um=(w_low, w_up), planes_um=[L(p) for p in PLANES], speed_mm_s=speed * 1e3,
@@ -418,7 +457,9 @@ tables = dict(
     branches=Table("branches.csv", ["cell", "type", "pass", "branch", "time_ms"]),
     crossings=Table("crossings.csv", ["time_ms", "cell", "type", "plane_x_um", "y_um", "z_um", "pass"]),
     haematocrit=Table("haematocrit.csv", ["time_ms", "parent", "lower", "upper"]))
-if args.vtk:
+if args.vtk and resumed is not None and resumed.state["vtk"] is not None:
+    cell_series, fluid_series = resumed.state["vtk"]  # the .pvd files go on
+elif args.vtk:
     lbmd.vtk_output.write_wall_surface(os.path.join(args.output, "walls.vtp"), lbf)
     cell_series = oif.CellSeries(os.path.join(args.output, "cells.pvd"))
     fluid_series = lbmd.vtk_output.FluidSeries(os.path.join(args.output, "fluid.pvd"), lbf,
@@ -465,16 +506,17 @@ class Progress:
     """A tqdm bar (Debian's python3-tqdm: steps/s and time left) on a
     terminal, else a line per output; rank 0 only."""
 
-    def __init__(self, mode):
+    def __init__(self, mode, start=0):
         if mode == "auto":
             mode = "bar" if sys.stderr.isatty() else "lines"
         self.mode = mode if rank0 else "off"
         self.bar = None
         self.started = self.said = wallclock.monotonic()
+        self.start = start
         if self.mode == "bar":
             try:
                 from tqdm import tqdm
-                self.bar = tqdm(total=total_steps, unit="step", unit_scale=True, dynamic_ncols=True,
+                self.bar = tqdm(total=total_steps, initial=start, unit="step", unit_scale=True, dynamic_ncols=True,
                                 bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} steps [{elapsed}<{remaining}, "
                                            "{rate_fmt}] {postfix}")
             except ImportError:
@@ -491,7 +533,7 @@ class Progress:
         elif self.mode == "lines" and (wallclock.monotonic() - self.said > 10.0 or done == total_steps):
             self.said = wallclock.monotonic()  # a line every 10 s
             elapsed = self.said - self.started
-            rate = done / elapsed if elapsed > 0 else 0.0
+            rate = (done - self.start) / elapsed if elapsed > 0 else 0.0
             left = (total_steps - done) / rate if rate > 0 else 0.0
             print(f"{simulated}  {rate:7.0f} steps/s  {left:6.0f} s left  branch entries: lower {lower}, "
                   f"upper {upper}", flush=True)
@@ -502,13 +544,39 @@ class Progress:
 
 
 # --- run
+def sample_state():
+    """What this script needs beside the engine's objects to go on from a
+    checkpoint (its bookkeeping and the CSV files' lengths)."""
+    return dict(args=args, force=force, reached=reached, flow_share=flow_share, volume0=volume0,
+                surface0=surface0, centre_previous=centre_previous, entered=entered, drift=drift, time0=time0,
+                release_step=release_step, outputs_done=outputs_done,
+                offsets={t.file.name.split(os.sep)[-1]: t.file.tell() for t in tables.values()},
+                vtk=(cell_series, fluid_series) if args.vtk else None)
+
+
+def checkpoint_objects():
+    return dict(lbf=lbf, cells=cells, state=sample_state())
+
+
+# a walltime signal (SIGTERM, SIGUSR1) writes a checkpoint and exits with
+# status 75; --resume goes on from it
+lbmd.checkpoint.stop_on_signal(checkpoint_path, system, checkpoint_objects)
+every = args.checkpoint_every if args.checkpoint_every is not None else (10.0 if size_name == "full" else None)
+steps_per_checkpoint = (max(1, int(round(UNITS.to_lattice(every * 1e-3, "s") / time_step / steps_per_output)))
+                        * steps_per_output if every else None)
 system.integrator.reset_timings()  # the report below covers the cells' run, not the calibration
-record()
-progress = Progress(args.progress)
-for i in range(1, n_outputs + 1):
-    system.integrator.run(steps_per_output)
+if resumed is None:
     record()
+progress = Progress(args.progress, start=outputs_done * steps_per_output)
+for i in range(outputs_done + 1, n_outputs + 1):
+    # up to the output's step (a run resumed from a walltime checkpoint
+    # does the rest of the interval the signal cut)
+    system.integrator.run(release_step + i * steps_per_output - system.step_count)
+    record()
+    outputs_done = i
     progress.update(i * steps_per_output)
+    if steps_per_checkpoint and (i * steps_per_output) % steps_per_checkpoint == 0 and i < n_outputs:
+        lbmd.checkpoint.save(checkpoint_path, system, **checkpoint_objects())
 progress.close()
 for table in tables.values():
     table.close()

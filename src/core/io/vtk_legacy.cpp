@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <sys/stat.h>
 
 namespace pyoif::io {
 
@@ -16,7 +17,15 @@ void write_vtk_structured_points(const std::string& path, const Vec3i& dims, con
   const std::size_t n_points = static_cast<std::size_t>(dims.prod());
   if (data.size() != n_points * n_components)
     throw InputError("VTK output: data size does not match the grid");
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "w"), &std::fclose);
+  // written under a temporary name and renamed at the end: a reader (or a
+  // run that dies here) never sees a half-written file under the final name
+  // (never over a device or fifo: only a regular file is replaced)
+  struct stat existing {};
+  if (::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode))
+    throw InputError("VTK output: '" + path +
+                     "' exists and is not a regular file (a directory, device or fifo)");
+  const std::string tmp = path + ".tmp";
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(tmp.c_str(), "w"), &std::fclose);
   if (!file)
     throw InputError("VTK output: cannot open '" + path + "' for writing");
   std::FILE* f = file.get();
@@ -39,9 +48,15 @@ void write_vtk_structured_points(const std::string& path, const Vec3i& dims, con
   // too (a full disk), else a truncated file would pass as written
   const bool write_error = std::ferror(f) != 0;
   const bool close_error = std::fclose(file.release()) != 0;
-  if (write_error || close_error)
+  if (write_error || close_error) {
+    std::remove(tmp.c_str());
     throw InputError("VTK output: error while writing '" + path +
-                     "' (disk full or not writable?); the file is incomplete");
+                     "' (disk full or not writable?); nothing was written");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InputError("VTK output: cannot rename the finished file to '" + path + "'");
+  }
 }
 
 } // namespace pyoif::io

@@ -565,8 +565,10 @@ int block_components(const std::string& prop) {
     return 3;
   if (prop == "density" || prop == "boundary")
     return 1;
-  if (prop == "population")
+  if (prop == "population" || prop == "stored_population")
     return Q;
+  if (prop == "coupling_field")
+    return 4;
   if (prop == "pressure_tensor")
     return 9;
   throw InputError("unknown lattice node property '" + prop + "'");
@@ -606,6 +608,16 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
         } else if (prop == "population") {
           const auto f = node_populations(node);
           std::copy(f.begin(), f.end(), o);
+        } else if (prop == "stored_population") {
+          const std::size_t own = owned_index(node);
+          for (int q = 0; q < Q; ++q)
+            o[q] = population_at(population_slot(q, own));
+        } else if (prop == "coupling_field") {
+          const std::size_t own = owned_index(node);
+          if (!m_field.empty() && field_valid(own)) {
+            o[0] = 1.0;
+            std::copy(m_field.begin() + 3 * own, m_field.begin() + 3 * own + 3, o + 1);
+          }
         } else {
           const Mat3 pt = node_pressure_tensor(node);
           for (int a = 0; a < 3; ++a)
@@ -622,8 +634,11 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
 void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                         const std::vector<double>& values) {
   const int nc = block_components(prop);
-  if (prop != "velocity" && prop != "density" && prop != "population")
+  if (prop != "velocity" && prop != "density" && prop != "population" &&
+      prop != "stored_population" && prop != "coupling_field")
     throw InputError(prop + " is read-only");
+  // a checkpoint's raw state: every node, solid ones included
+  const bool raw = prop == "stored_population" || prop == "coupling_field";
   check_block(lo, hi);
   const Vec3i n = hi - lo;
   if (values.size() != static_cast<std::size_t>(n.prod()) * nc)
@@ -636,7 +651,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
     if (prop == "density")
       require(values[v] > 0.0, "density must be a finite number > 0");
   }
-  if (n.prod() == 1) {
+  if (n.prod() == 1 && !raw) {
     // a single boundary node is an error on every rank (its owner knows it)
     const std::size_t own = owned_index(lo);
     double solid = own != npos && m_flag[own] != 0 ? 1.0 : 0.0;
@@ -653,8 +668,23 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
       for (int k = lo[2]; k < hi[2]; ++k, v += nc) {
         const Vec3i node(i, j, k);
         const std::size_t own = owned_index(node);
+        if (own != npos && prop == "stored_population") {
+          for (int q = 0; q < Q; ++q)
+            set_population_at(population_slot(q, own), v[q]);
+          continue;
+        }
+        if (own != npos && prop == "coupling_field") {
+          if (v[0] != 0.0) {
+            open_impulse_field();
+            m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
+            add_field_impulse(own, Vec3(v[1], v[2], v[3]));
+          } else if (!m_field.empty()) {
+            m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
+          }
+          continue;
+        }
         // a block spanning boundary nodes sets the fluid nodes only
-        if (own == npos || m_flag[own] != 0)
+        if (own == npos || m_flag[own] != 0 || raw)
           continue;
         // written here, not through set_node_*: those count a change on
         // the owner only, and the fluid's state_version must stay the same

@@ -134,6 +134,11 @@ public:
   const DomainGrid& domain() const { return m_grid; }
   bool distributed() const { return m_grid.size() > 1; }
   std::uint64_t n_updates() const { return m_updates; }
+  /** Sets the update counter (the thermal noise's counter), from a checkpoint. */
+  void set_n_updates(std::uint64_t n) {
+    m_updates = n;
+    ++m_state_version;
+  }
   /** Changes whenever the populations, the boundaries or ext_force_density
    *  change (every update, every setter): System recomputes the coupling
    *  forces when a run starts from a fluid changed since the last one. */
@@ -191,11 +196,16 @@ public:
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
   /** Collective: property values of the block lo <= node < hi, (x, y, z,
    *  component) order with z fastest, the same on every rank. prop:
-   *  velocity, density, boundary, population, pressure_tensor. */
+   *  velocity, density, boundary, population, pressure_tensor; for
+   *  checkpoints also stored_population (the 19 stored values, exact: in
+   *  single precision the float deviations from the rest state) and
+   *  coupling_field (per node: 1 where the particles deposited since the
+   *  last update, else 0, and the 3 deposited values). */
   std::vector<double> get_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi) const;
   /** Collective: sets velocity, density or population on the block; a block
    *  of several nodes skips boundary nodes, a single boundary node is an
-   *  error on every rank. */
+   *  error on every rank. stored_population and coupling_field (see
+   *  get_block) are set on every node of the block. */
   void set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                  const std::vector<double>& values);
   /** -1 for a fluid node, else the index of the boundary. */

@@ -9,6 +9,7 @@
 #include "particles/particle_store.hpp"
 #include "system/box_geometry.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -111,6 +112,21 @@ public:
     invalidate();
   }
   std::size_t n_rebuilds() const { return m_n_rebuilds; }
+  /** The folded positions of the last re-sort, empty when a re-sort is due
+   *  anyway: a checkpoint keeps them, so that a restart re-sorts at them and
+   *  has the pair list, in its order, of the run it continues. */
+  std::vector<Vec3> rebuild_reference() const {
+    return m_valid ? m_pos_at_rebuild : std::vector<Vec3>{};
+  }
+  /** Every excluded pair (id1 < id2), sorted. */
+  std::vector<std::array<int, 2>> exclusion_pairs() const {
+    std::vector<std::array<int, 2>> out;
+    out.reserve(m_exclusions.size());
+    for (const std::uint64_t k : m_exclusions)
+      out.push_back({static_cast<int>(k >> 32), static_cast<int>(k & 0xffffffffu)});
+    std::sort(out.begin(), out.end());
+    return out;
+  }
   double range() const { return m_range; }
 
 private:

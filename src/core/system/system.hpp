@@ -205,6 +205,21 @@ public:
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;
 
+  // --- checkpoints (system/checkpoint.cpp) ------------------------------------
+  /** MD steps since the last lattice update. */
+  int lb_substep() const { return m_lb_substep; }
+  /** Collective. The run state of a checkpoint, once the configuration, the
+   *  particles (in the saved local order), the bonds and the fluid are back:
+   *  folded positions and images, forces and normals of the last step (per
+   *  local index), the positions of the last re-sort (empty: none valid) and
+   *  the MD steps since the last lattice update. Re-sorts at the reference
+   *  positions, so the pair list is that of the saved run, then puts the
+   *  particles where they were and marks the forces valid: the next run goes
+   *  on as the saved run would have, bit for bit. */
+  void restore_run_state(const std::vector<Vec3>& folded_pos, const std::vector<Vec3i>& image,
+                         const std::vector<Vec3>& force, const std::vector<Vec3>& normal,
+                         const std::vector<Vec3>& rebuild_reference, int lb_substep);
+
   // --- particles over the ranks of a decomposed lattice (system_parallel.cpp)
   // Every rank stores every particle (same local indices everywhere), but
   // with a decomposed fluid each particle is integrated, and its forces

@@ -19,6 +19,7 @@ import weakref
 import numpy as np
 
 import lbmd
+from lbmd.file_output import replace_atomically
 from lbmd.particle_data import ParticleHandle
 from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, real_number as _real_number, vector3 as _vector3
 
@@ -867,6 +868,11 @@ class OifCell:
         system.max_oif_objects = cell_id + 1
         _CELLS.add(self)
 
+    def __setstate__(self, state):
+        # a cell loaded from a checkpoint (lbmd.checkpoint.load) is live again
+        self.__dict__.update(state)
+        _CELLS.add(self)
+
     def _discard(self):
         """Removes the cell's particles (and so their bonds and exclusions)
         while an error is being raised: a failure here must not hide it."""
@@ -1083,11 +1089,16 @@ class OifCell:
             if any(ln.split()[1:2] == [data_name] for ln in text.splitlines()
                    if ln.startswith(("SCALARS", "VECTORS"))):
                 raise ValueError(f"{owner}: '{os.fspath(file_name)}' already has data named '{data_name}'")
-            with open(file_name, "a") as f:
-                if first_append:
-                    f.write(f"POINT_DATA {n}\n")
-                f.write(f"SCALARS {data_name} double 1\nLOOKUP_TABLE default\n")
-                f.write("\n".join(repr(float(v)) for v in data) + "\n")
+            # the whole file again, through a temporary file renamed over it:
+            # a crash here leaves the previous file, never a half-appended one
+            text += f"POINT_DATA {n}\n" if first_append else ""
+            text += f"SCALARS {data_name} double 1\nLOOKUP_TABLE default\n"
+            text += "\n".join(repr(float(v)) for v in data) + "\n"
+
+            def write_to(tmp):
+                with open(tmp, "w") as f:
+                    f.write(text)
+            replace_atomically(file_name, owner, write_to)
 
         _vtk.on_writer(append)
 

@@ -37,6 +37,7 @@ from . import lb
 from . import lbboundaries
 from . import vtk_output
 from . import units
+from . import checkpoint
 from . import system as _system_module
 from .system import CellDriftWarning, System
 
@@ -73,5 +74,5 @@ if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
 __all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
-           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "units",
+           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "units", "checkpoint",
            "rank", "size", "comm"]

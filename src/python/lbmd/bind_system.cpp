@@ -11,8 +11,11 @@
 #include <cmath>
 #include <csignal>
 #include <limits>
+#include <optional>
 #include <signal.h>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace py = pybind11;
 
@@ -46,6 +49,50 @@ private:
   static inline volatile std::sig_atomic_t s_flag = 0;
   struct sigaction m_previous {};
   bool m_active = false;
+};
+
+/** Walltime signals (lbmd.checkpoint.stop_on_signal): while armed, the
+ *  signals only set a flag; a run stops at its next interruption point once
+ *  any rank has it (agreed over MPI_COMM_WORLD), and Python writes the
+ *  checkpoint. */
+class StopSignals {
+public:
+  static void arm(const std::vector<int>& signals) {
+    disarm();
+    for (int sig : signals) {
+      struct sigaction ours {
+      }, previous{};
+      ours.sa_handler = &StopSignals::note;
+      sigemptyset(&ours.sa_mask);
+      if (sigaction(sig, &ours, &previous) != 0)
+        throw InputError("stop_on_signal: cannot handle signal " + std::to_string(sig));
+      s_previous.emplace_back(sig, previous);
+    }
+    s_flag = 0;
+  }
+  static void disarm() {
+    for (auto& [sig, previous] : s_previous)
+      sigaction(sig, &previous, nullptr);
+    s_previous.clear();
+  }
+  static bool armed() { return !s_previous.empty(); }
+  /** Whether a signal came on any rank (collective when armed under MPI). */
+  static bool agreed() {
+    int pending = s_flag != 0;
+    int initialized = 0, size = 1;
+    MPI_Initialized(&initialized);
+    if (initialized)
+      MPI_Comm_size(MPI_COMM_WORLD, &size);
+    if (size > 1)
+      MPI_Allreduce(MPI_IN_PLACE, &pending, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return pending != 0;
+  }
+  static void clear() { s_flag = 0; }
+
+private:
+  static void note(int) { s_flag = 1; }
+  static inline volatile std::sig_atomic_t s_flag = 0;
+  static inline std::vector<std::pair<int, struct sigaction>> s_previous;
 };
 
 using IdArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
@@ -303,6 +350,9 @@ void bind_system(py::module_& m) {
       .def_readonly("gamma", &LangevinParams::gamma)
       .def_readonly("seed", &LangevinParams::seed);
 
+  m.def("arm_stop_signals", &StopSignals::arm,
+        "lbmd.checkpoint.stop_on_signal: these signals stop a run (empty list: none)");
+  m.def("clear_stop_signal", &StopSignals::clear);
   py::class_<System, std::shared_ptr<System>>(m, "System")
       .def(py::init<const Vec3&, const std::array<bool, 3>&>(), py::arg("box_l"),
            py::arg("periodicity"))
@@ -405,18 +455,25 @@ void bind_system(py::module_& m) {
       .def(
           "integrate",
           [](System& s, int steps, bool recalc_forces, bool reuse_forces, bool interruptible) {
-            if (!interruptible) {
+            // returns whether a walltime signal stopped the run (StopSignals)
+            const bool stoppable = StopSignals::armed();
+            if (stoppable && StopSignals::agreed())
+              return true; // a signal between runs: stop before the first step
+            if (!interruptible && !stoppable) {
               s.integrate(steps, recalc_forces, reuse_forces);
-              return;
+              return false;
             }
             struct Interrupted {};
+            struct Stopped {};
             struct ClearPoint {
               System& s;
               ~ClearPoint() { s.interruption_point = nullptr; }
             } clear_point{s};
-            s.interruption_point = [] {
-              if (SigintNote::pending())
+            s.interruption_point = [interruptible, stoppable] {
+              if (interruptible && SigintNote::pending())
                 throw Interrupted{};
+              if (stoppable && StopSignals::agreed())
+                throw Stopped{};
             };
             // the signal, handed to Python's own machinery once the state is
             // consistent: its handler runs here
@@ -427,21 +484,26 @@ void bind_system(py::module_& m) {
             };
             int remaining = steps;
             while (true) {
-              SigintNote note; // our C handler while the loop runs
+              std::optional<SigintNote> note; // our C handler while the loop runs
+              if (interruptible)
+                note.emplace();
               const std::uint64_t start = s.step_count;
               bool finished = false;
               try {
                 s.integrate(remaining, recalc_forces, reuse_forces);
                 finished = true;
               } catch (const Interrupted&) {
+              } catch (const Stopped&) {
+                return true;
               }
-              note.restore();
+              if (note)
+                note->restore();
               if (finished) {
                 // a signal after the last interruption point (a run shorter
                 // than 16 steps, its last steps): handled after the run
-                if (SigintNote::pending())
+                if (interruptible && SigintNote::pending())
                   hand_to_python();
-                return;
+                return false;
               }
               remaining -= static_cast<int>(s.step_count - start);
               recalc_forces = reuse_forces = false; // the forces are those of the last step

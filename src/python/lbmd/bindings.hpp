@@ -12,6 +12,7 @@ void bind_interactions(pybind11::module_& m);
 void bind_shapes(pybind11::module_& m);
 void bind_lb(pybind11::module_& m);
 void bind_oif(pybind11::module_& m);
+void bind_checkpoint(pybind11::module_& m);
 
 /** Called first by every collective query (particle properties, the
  *  fluid's nodes, analysis): under mpirun a non-blocking barrier of all

@@ -29,6 +29,8 @@ class ShapeBasedConstraint(Constraint):
         object.__setattr__(self, "_core", _lbmd.ShapeBasedConstraint(
             self.shape._core, self.particle_type, self.penetrable, self.only_positive))
 
+    _restore_core = _validate
+
     def total_force(self):
         """Force the particles exert on the shape, at the last force calculation.
         Under mpirun with a fluid the particles are spread over the ranks:

@@ -69,6 +69,11 @@ class LBFluid(ParameterObject):
         object.__setattr__(self, "_core", None)
         object.__setattr__(self, "_system", None)
 
+    def _restore_core(self):
+        # made again when the unpickled System activates it (lbmd.checkpoint)
+        object.__setattr__(self, "_core", None)
+        object.__setattr__(self, "_system", None)
+
     # --- actor protocol -------------------------------------------------------
     def _activate(self, system):
         if self._core is not None:

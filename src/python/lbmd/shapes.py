@@ -42,6 +42,10 @@ class Shape(ParameterObject):
         return bool(self._core.is_inside(_position(f"{type(self).__name__}.is_inside", position)))
 
 
+    def _restore_core(self):
+        self._validate()
+
+
 class Wall(Shape):
     """Half-space behind the plane normal·x = dist (normal made unit); particles
     live on the side the normal points to."""
@@ -161,6 +165,11 @@ class Union(Shape):
     def clear(self):
         self._core.clear()
         self._shapes.clear()
+
+    def _restore_core(self):
+        object.__setattr__(self, "_core", _lbmd.Union())
+        for s in self._shapes:
+            self._core.add(s._core)
 
     def size(self):
         return len(self._shapes)

@@ -121,10 +121,13 @@ class Integrator:
                 import warnings
                 warnings.warn(f"check_settings could not check the scene: {e}", RuntimeWarning)
         try:
-            self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"],
-                                         _interruptible())
+            stopped = self._system._core.integrate(v["steps"], v["recalc_forces"], v["reuse_forces"],
+                                                   _interruptible())
         finally:
             self._system._warn_drifted_cells()
+        if stopped:  # a walltime signal (lbmd.checkpoint.stop_on_signal): save and exit
+            from . import checkpoint
+            checkpoint._after_stop()
 
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
@@ -438,6 +441,12 @@ class System:
         return self._core.time
 
     @property
+    def step_count(self):
+        """MD steps integrated since the System was made (kept by checkpoints;
+        the counter that keys the thermal noise). Read-only."""
+        return int(self._core.step_count)
+
+    @property
     def cell_checks(self):
         """Whether the steps of a run check the cells (default True): an
         inverted triangle or a volume below 1/4 or above 4 times the relaxed
@@ -476,6 +485,16 @@ class System:
                 f"{time:g}; a cell squeezed by the flow or poorly held by its moduli (raise kv or "
                 f"kag, lower the flow or the time step; system.cell_drift_tolerance sets the "
                 f"threshold)", CellDriftWarning, stacklevel=3)
+
+    # lbmd.checkpoint.save/load pickle the System (configuration) and write its
+    # bulk state (particles, lattice) as datasets
+    def __getstate__(self):
+        from .checkpoint import system_state
+        return system_state(self)
+
+    def __setstate__(self, state):
+        from .checkpoint import restore_system
+        restore_system(self, state)
 
     def __repr__(self):
         return (f"System(box_l={self.box_l.tolist()}, periodicity={self.periodicity}, "

@@ -208,6 +208,21 @@ class ParameterObject:
     def _validate(self):
         """Checks across parameters; subclasses override."""
 
+    #: attributes holding C++ objects or the owning system: left out when the
+    #: object is pickled (lbmd.checkpoint) and made again by _restore_core
+    #: and by the System the object belongs to
+    _not_pickled = ("_core", "_system_core", "_system")
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in self._not_pickled}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._restore_core()
+
+    def _restore_core(self):
+        """After unpickling: make the C++ object again (shapes, constraints)."""
+
     def get_params(self):
         return {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in self._values.items()}
 

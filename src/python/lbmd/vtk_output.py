@@ -127,6 +127,15 @@ class TimeSeries:
         self.steps = []  # (time, file name relative to the .pvd's folder)
         self._vtk, self._ns = import_vtk(owner)
 
+    # a series in a checkpoint (lbmd.checkpoint) goes on after a restart:
+    # its steps are kept, the VTK module is imported again
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in ("_vtk", "_ns")}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._vtk, self._ns = import_vtk(self._owner)
+
     def _step_time(self, time):
         """time as a float, finite and later than the last step's."""
         owner = f"{self._owner}.write"
