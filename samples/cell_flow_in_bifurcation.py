@@ -6,7 +6,8 @@ scene of the PyOIF paper's study (its Figs 2-5), its physical inputs in SI.
     pyoif samples/cell_flow_in_bifurcation.py [--small | --full] [--case A|B|C]
           [--cells N] [--rare] [--seed S] [--duration MS] [--output-every US]
           [--speed MM_S] [--height UM] [--output DIR] [--vtk] [--no-plots]
-          [--progress auto|bar|lines|off]
+          [--progress auto|bar|lines|off] [--checkpoint FILE] [--checkpoint-every MS]
+          [--resume]
 
 The paper's scene (--full). A channel 20 um high, periodic along the flow
 (x, 160 um): the parent channel (30 um wide) splits at x = 50 um into a
@@ -44,6 +45,11 @@ Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
   plane) with --vtk, for ParaView;
 - bifurcation_fig2..5.png from samples/analysis/plot_bifurcation.py (also
   run by hand to combine seeds; --no-plots skips it).
+- checkpoint.h5 (or --checkpoint FILE): the whole state, written on
+  SIGTERM or SIGUSR1 (a batch system's walltime warning; the run then exits
+  with status 75) and every --checkpoint-every ms of flow (default 10 with
+  --full); --resume continues from it, the tables cut back to its output
+  (doc/checkpoints.md).
 At the end: the share of branch entries per branch with its count and
 statistical uncertainty, the cells' volume and surface drift, and where the
 time went. Under mpirun every rank runs this script, rank 0 writes.
@@ -424,6 +430,7 @@ class Table:
     it) cut off."""
 
     def __init__(self, name, header):
+        self.name = name
         path = os.path.join(args.output, name) if rank0 else os.devnull
         if resumed is not None and rank0:
             self.file = open(path, "r+", newline="")
@@ -438,7 +445,12 @@ class Table:
     def row(self, *values):
         self.writer.writerow([f"{v:.4f}" if isinstance(v, float) else v for v in values])
 
+    def length(self):
+        """Bytes written (the checkpoint keeps it)."""
+        return self.file.tell() if not self.file.closed else self.closed_length
+
     def close(self):
+        self.closed_length = self.file.tell()
         self.file.close()
 
 
@@ -550,7 +562,7 @@ def sample_state():
     return dict(args=args, force=force, reached=reached, flow_share=flow_share, volume0=volume0,
                 surface0=surface0, centre_previous=centre_previous, entered=entered, drift=drift, time0=time0,
                 release_step=release_step, outputs_done=outputs_done,
-                offsets={t.file.name.split(os.sep)[-1]: t.file.tell() for t in tables.values()},
+                offsets={t.name: t.length() for t in tables.values()},
                 vtk=(cell_series, fluid_series) if args.vtk else None)
 
 
