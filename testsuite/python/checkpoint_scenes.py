@@ -3,6 +3,7 @@ at one rank count, continued at the same or another rank count.
 
     mpirun -np K pyoif checkpoint_scenes.py full N1 N2 CKPT OUT.npz
     mpirun -np K pyoif checkpoint_scenes.py resume CKPT N2 OUT.npz LOADED.npz
+    mpirun -np K pyoif checkpoint_scenes.py walltime CKPT N OUT.npz [SIGNAL_RANK]
 
 The scene is mpi_scenes.scene_cells_thermal (fluid with kT > 0, three RBCs
 and a sphere straddling the subdomain cuts and the periodic boundary, walls
@@ -12,6 +13,10 @@ so that a checkpoint can fall between a lattice update's deposits). `full`
 runs N1 steps, saves CKPT (system, fluid and cells), runs N2 more steps and
 writes the state (mpi_scenes.state) to OUT on rank 0; `resume` loads CKPT,
 writes the state as loaded to LOADED, runs N2 steps and writes OUT.
+`walltime` runs the scene up to step N (loading CKPT if it exists) with
+lbmd.checkpoint.stop_on_signal(CKPT, ...); with SIGNAL_RANK, that rank alone
+gets a signal (SIGALRM, armed beside SIGUSR1) 0.3 s into the run, so the
+ranks must agree to stop at the same step; the state at step N goes to OUT.
 """
 import os
 import sys
@@ -57,6 +62,22 @@ def main(argv):
         sc = {"system": ns.system, "lbf": ns.lbf, "cells": ns.cells, "force": ns.force}
         write(loaded, sc)
         sc["system"].integrator.run(n2)
+        write(out, sc)
+    elif mode == "walltime":
+        import signal
+        ckpt, n, out = argv[1], int(argv[2]), argv[3]
+        if os.path.exists(ckpt):
+            ns = lbmd.checkpoint.load(ckpt)
+            sc = {"system": ns.system, "lbf": ns.lbf, "cells": ns.cells, "force": ns.force}
+        else:
+            sc = mpi_scenes.scene_cells_thermal(None)
+        system = sc["system"]
+        lbmd.checkpoint.stop_on_signal(ckpt, system, {"lbf": sc["lbf"], "cells": sc["cells"], "force": sc["force"]},
+                                       signals=[signal.SIGUSR1, signal.SIGALRM])
+        if len(argv) > 4 and MPI.COMM_WORLD.Get_rank() == int(argv[4]):
+            signal.setitimer(signal.ITIMER_REAL, 0.3)
+        while system.step_count < n:
+            system.integrator.run(n - system.step_count)
         write(out, sc)
     else:
         raise SystemExit(f"checkpoint_scenes: unknown mode {mode!r}")

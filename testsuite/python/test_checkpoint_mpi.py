@@ -83,6 +83,28 @@ class CheckpointRanks(unittest.TestCase):
 
 
 @unittest.skipIf(MPIRUN is None, "no mpirun")
+class SignalOnOneRank(unittest.TestCase):
+    def test_ranks_agree_on_the_step(self):
+        """Rank 1 alone gets the signal: both ranks stop after the same step
+        (one checkpoint, status 75), and the resumed run ends in the state
+        of the uninterrupted one, bit for bit."""
+        folder = tempfile.mkdtemp(prefix="test_checkpoint_one_rank_")
+        n = 1500
+        mpirun(2, SCENES, "walltime", os.path.join(folder, "none.h5"), str(n), os.path.join(folder, "whole.npz"))
+        ckpt = os.path.join(folder, "ckpt.h5")
+        cmd = [MPIRUN, "--oversubscribe", "-np", "2", LAUNCHER, SCENES, "walltime", ckpt, str(n),
+               os.path.join(folder, "never.npz"), "1"]
+        stopped = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=300)
+        self.assertEqual(stopped.returncode, EXIT_CHECKPOINTED, stopped.stderr[-3000:])
+        self.assertEqual(stopped.stderr.count("checkpoint of step"), 1, stopped.stderr[-3000:])
+        self.assertFalse(os.path.exists(os.path.join(folder, "never.npz")))
+        mpirun(2, SCENES, "walltime", ckpt, str(n), os.path.join(folder, "resumed.npz"))
+        whole, resumed = load(os.path.join(folder, "whole.npz")), load(os.path.join(folder, "resumed.npz"))
+        differ = [k for k in whole if not np.array_equal(whole[k], resumed[k])]
+        self.assertEqual(differ, [])
+
+
+@unittest.skipIf(MPIRUN is None, "no mpirun")
 class SampleSignalled(unittest.TestCase):
     def test_walltime_signal_and_resume(self):
         folder = tempfile.mkdtemp(prefix="test_checkpoint_sample_")
