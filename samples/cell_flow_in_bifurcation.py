@@ -40,7 +40,8 @@ Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
 - crossings.csv: centre y and z where a cell crossed x = 75 um (the
   branches' middle) and x = 130 um (after the confluence) -- Fig 2;
 - haematocrit.csv: cell volume over fluid volume in the parent channel and
-  each branch (a cell counts where its centre is) -- Fig 5;
+  each branch (a cell counts where its centre is), with --stiff-fraction
+  also the stiff cells' alone -- Fig 5;
 - walls.vtp, cells.pvd (+ .vtp) and fluid.pvd (+ .vti, the mid-height
   plane) with --vtk, for ParaView;
 - bifurcation_fig2..5.png from samples/analysis/plot_bifurcation.py (also
@@ -103,6 +104,15 @@ RBC_MEMBRANE = dict(shear_modulus=2.1651e-6,        # N/m
 # kvisc 1 held the 8 ms). A viscosity: not scaled with the flow.
 MEMBRANE_VISCOSITY = 4.33e-10         # Pa s m (kvisc 1.0)
 RARE_STIFFNESS = 10.0                 # the rare cell's shear, bending, local area moduli / the RBC's
+# --stiff-fraction: a second RBC population, as for the paper's "mixed"
+# suspension of Fig 5 (e.g. malaria-infected cells, whose shear modulus
+# rises 2 to 10 times over the parasite's stages: Suresh et al., Acta
+# Biomater. 1, 15 (2005)); its shear, bending and local-area moduli / the RBC's
+STIFF_RBC = 5.0
+# an rbc374 in this scene (node mass as below) held 60x the paper's moduli at
+# the time step 0.1 us and failed at 80x within 12 steps: the stiff
+# population of the fast --small flow stays at 60x (2.2x the RBCs there)
+STIFFEST_RBC = 60.0
 # in fluid at time step 0.1 us, membranes held up to 100x the paper's RBC
 # moduli and failed at 200x (doc/accuracy.md): the rare cell of the fast
 # --small flow stays below that (3.7x the RBC's there)
@@ -138,6 +148,10 @@ def parse_arguments(argv=None):
     ap.add_argument("--case", choices=sorted(CASES), default="A", help="branch widths: A 10/20, B 12/18, C 15/15 um")
     ap.add_argument("--cells", type=int, default=None, help="number of RBCs (small 24, full 40; the paper: 40, 60)")
     ap.add_argument("--rare", action="store_true", help="add the stiff rare cell (always there with --full)")
+    ap.add_argument("--stiff-fraction", type=float, default=0.0,
+                    help="fraction of the RBCs that are stiffer (x5 moduli, x2.2 with --small; the paper's 'mixed' "
+                         "suspension, Fig 5); "
+                         "with the same --seed the cells start where a uniform run's do")
     ap.add_argument("--seed", type=int, default=1, help="random seed of the cells' placement")
     ap.add_argument("--duration", type=float, default=None, help="simulated flow in ms (small 8, full 138)")
     ap.add_argument("--output-every", type=float, default=None, help="output interval in us (small 20, full 200)")
@@ -172,6 +186,8 @@ def parse_arguments(argv=None):
         value = getattr(args, name)
         if value is not None and value < (0 if name in ("cells", "cycles") else 1):
             ap.error(f"--{name} must be {'>= 0' if name != 'steps' else '>= 1'}, got {value}")
+    if not (0.0 <= args.stiff_fraction <= 1.0):
+        ap.error(f"--stiff-fraction must be between 0 and 1, got {args.stiff_fraction}")
     for name in ("duration", "output_every", "speed", "height", "force", "stiffness", "checkpoint_every"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
@@ -191,6 +207,7 @@ if args.resume:  # the scene, the cells and this script's bookkeeping as the che
 size_name = "full" if args.full else "small"
 size = SIZES[size_name]
 n_rbc = args.cells if args.cells is not None else size["cells"]
+n_stiff = int(round(args.stiff_fraction * n_rbc))  # of the n_rbc, the stiffer population (particle type 2)
 rare = args.rare or size["rare"]
 height = args.height * 1e-6 if args.height is not None else size["height"]
 speed = args.speed * 1e-3 if args.speed is not None else size["speed"]
@@ -317,7 +334,16 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
                                     membrane_viscosity=MEMBRANE_VISCOSITY)
     rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3, normal=True,
                           **rbc_moduli)
-    types, counts, ptypes = [rbc], [n_rbc], [0]
+    types, counts, ptypes = [rbc], [n_rbc - n_stiff], [0]
+    if n_stiff:  # the same mesh and size: seeded in the sequence of a uniform run, the last n_stiff are stiff
+        stiff_moduli = dict(rbc_moduli)
+        for k in ("ks", "kb", "kal"):
+            stiff_moduli[k] *= min(STIFF_RBC, STIFFEST_RBC / stiffness)
+        stiff_type = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3,
+                                     normal=True, **stiff_moduli)
+        types.append(stiff_type)
+        counts.append(n_stiff)
+        ptypes.append(2)
     if rare:
         rare_moduli = dict(rbc_moduli)
         for k in ("ks", "kb", "kal"):
@@ -380,7 +406,8 @@ driving = (f"centre-line speed {speed * 1e3:.3g} mm/s (reached {to_mm_s(reached)
 if resumed is not None:
     say(f"resumed from {checkpoint_path} at {to_ms(system.time - resumed.state['time0']):.4g} ms of flow "
         f"(step {system.step_count})")
-say(f"{size_name} scene, case {args.case}: {n_rbc} RBCs{' + rare cell' if rare else ''}, branches "
+say(f"{size_name} scene, case {args.case}: {n_rbc} RBCs{f' ({n_stiff} stiff)' if n_stiff else ''}"
+    f"{' + rare cell' if rare else ''}, branches "
     f"{w_low:g}/{w_up:g} um, height {H:g} um; {driving}, membranes {stiffness:.3g}x the paper's moduli; "
     f"{to_ms(total_steps * time_step):g} ms of flow = {total_steps} steps, output every "
     f"{to_ms(steps_per_output * time_step) * 1e3:g} us")
@@ -457,7 +484,8 @@ class Table:
 os.makedirs(args.output, exist_ok=True)
 # the scene, for plot_bifurcation.py (which combines runs of one case)
 resumed is None and file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
-    size=size_name, case=args.case, seed=args.seed, rbcs=n_rbc, rare=rare, channel_length_um=L_X,
+    size=size_name, case=args.case, seed=args.seed, rbcs=n_rbc, rare=rare, stiff_rbcs=n_stiff,
+    stiff_factor=min(STIFF_RBC, STIFFEST_RBC / stiffness) if n_stiff else None, channel_length_um=L_X,
     box_width_um=L_Y, height_um=H, parent_um=parent, split_um=split, join_um=join, island_um=island,
     branch_widths_um=(w_low, w_up), planes_um=[L(p) for p in PLANES], speed_mm_s=speed * 1e3,
     stiffness=stiffness, force=force, time_step_us=time_step, steps_per_output=steps_per_output,
@@ -468,7 +496,8 @@ tables = dict(
                               "surface_um2", "volume_um3", "diameter_um", "rotation_deg", "pass"]),
     branches=Table("branches.csv", ["cell", "type", "pass", "branch", "time_ms"]),
     crossings=Table("crossings.csv", ["time_ms", "cell", "type", "plane_x_um", "y_um", "z_um", "pass"]),
-    haematocrit=Table("haematocrit.csv", ["time_ms", "parent", "lower", "upper"]))
+    haematocrit=Table("haematocrit.csv", ["time_ms", "parent", "lower", "upper"]
+                      + (["parent_stiff", "lower_stiff", "upper_stiff"] if n_stiff else [])))
 if args.vtk and resumed is not None and resumed.state["vtk"] is not None:
     cell_series, fluid_series = resumed.state["vtk"]  # the .pvd files go on
 elif args.vtk:
@@ -483,6 +512,7 @@ def record():
     last output (interpolated), the haematocrit; collective under MPI."""
     t = to_ms(system.time - time0)
     cell_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}
+    stiff_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}  # the stiff population's share
     for k, c in enumerate(cells):
         centre = c.get_origin()
         x, y, z = np.mod(centre, system.box_l)
@@ -492,6 +522,8 @@ def record():
         drift["volume"] = max(drift["volume"], abs(volume / volume0[k] - 1.0))
         drift["surface"] = max(drift["surface"], abs(surface / surface0[k] - 1.0))
         cell_volume[region_of(x, y)] += volume
+        if c.particle_type == 2:
+            stiff_volume[region_of(x, y)] += volume
         tables["cells"].row(t, k, c.particle_type, float(x), float(y), float(z),
                             *(float(to_mm_s(v)) for v in velocity), float(surface), float(volume),
                             float(c.diameter()), float(math.degrees(c.get_rotation_angles()[0])), lap)
@@ -506,7 +538,9 @@ def record():
                     at = np.mod(before + w * (centre - before), system.box_l)
                     tables["crossings"].row(t, k, c.particle_type, plane, float(at[1]), float(at[2]), n)
         centre_previous[k] = centre
-    tables["haematocrit"].row(t, *(f"{cell_volume[r] / fluid_volume[r]:.6f}" for r in ("parent", "lower", "upper")))
+    regions = ("parent", "lower", "upper")
+    tables["haematocrit"].row(t, *(f"{cell_volume[r] / fluid_volume[r]:.6f}" for r in regions),
+                              *((f"{stiff_volume[r] / fluid_volume[r]:.6f}" for r in regions) if n_stiff else ()))
     for table in tables.values():
         table.file.flush()
     if args.vtk:

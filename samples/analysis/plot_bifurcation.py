@@ -19,7 +19,8 @@ ten seedings per case. Writes, into --output (default: the first DIR):
   against the x of their centre, a line per pass, coloured by the branch of
   that pass;
 - bifurcation_fig5.png: the haematocrit (cell volume / fluid volume) of the
-  parent channel and of each branch over time, averaged over windows of
+  parent channel and of each branch over time (uniform runs and runs with a
+  stiff population, --stiff-fraction, side by side), averaged over windows of
   --window ms (default 10 ms, as the paper, or an eighth of the run when
   that is shorter), the runs' mean.
 
@@ -199,6 +200,9 @@ def figure4(runs, plt, max_cells=3):
 
 
 def figure5(runs, plt, window_ms=None):
+    """Haematocrit per region in windows; runs with a stiff population
+    (--stiff-fraction, the paper's "mixed" suspension) in a panel of their
+    own beside the uniform ones, their stiff cells' share dashed."""
     scene = runs[0]["scene"]
     t_end = min(run["haematocrit"]["time_ms"][-1] for run in runs)
     if window_ms is None:
@@ -206,21 +210,36 @@ def figure5(runs, plt, window_ms=None):
     edges = np.arange(0.0, t_end + 1e-9, window_ms)
     if len(edges) < 2:
         edges = np.array([0.0, t_end])
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for region, colour in (("parent", "k"), ("lower", "tab:blue"), ("upper", "tab:orange")):
+    groups = [(name, [r for r in runs if bool(r["scene"].get("stiff_rbcs")) == mixed])
+              for name, mixed in (("uniform", False), ("mixed", True))]
+    groups = [(name, members) for name, members in groups if members]
+    fig, axes = plt.subplots(1, len(groups), figsize=(7 * len(groups), 4), sharey=True, squeeze=False)
+
+    def windowed(members, column):
         means = []
-        for run in runs:
+        for run in members:
             h = run["haematocrit"]
             idx = np.clip(np.digitize(h["time_ms"], edges) - 1, 0, len(edges) - 2)
-            means.append([h[region][idx == w].mean() if np.any(idx == w) else np.nan
+            means.append([h[column][idx == w].mean() if np.any(idx == w) else np.nan
                           for w in range(len(edges) - 1)])
-        mean = np.nanmean(np.array(means), axis=0)
-        label = region if region == "parent" else f"{region} branch"
-        ax.step(edges, np.append(mean, mean[-1]), where="post", color=colour, label=label)
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("haematocrit (cell volume / fluid volume)")
-    ax.set_title(f"Fig 5: haematocrit in {window_ms:.3g} ms windows (case {scene['case']}, {len(runs)} run(s))")
-    ax.legend()
+        return np.nanmean(np.array(means), axis=0)
+
+    for ax, (name, members) in zip(axes[0], groups):
+        for region, colour in (("parent", "k"), ("lower", "tab:blue"), ("upper", "tab:orange")):
+            label = region if region == "parent" else f"{region} branch"
+            mean = windowed(members, region)
+            ax.step(edges, np.append(mean, mean[-1]), where="post", color=colour, label=label)
+            if name == "mixed" and region + "_stiff" in members[0]["haematocrit"]:
+                mean = windowed(members, region + "_stiff")
+                ax.step(edges, np.append(mean, mean[-1]), where="post", color=colour, linestyle="--",
+                        label=f"{label}, stiff cells")
+        ax.set_xlabel("time (ms)")
+        stiff = members[0]["scene"].get("stiff_rbcs") or 0
+        ax.set_title(f"{name}: {members[0]['scene']['rbcs']} RBCs" + (f", {stiff} stiff" if stiff else "")
+                     + f" ({len(members)} run(s))")
+        ax.legend(fontsize=8)
+    axes[0][0].set_ylabel("haematocrit (cell volume / fluid volume)")
+    fig.suptitle(f"Fig 5: haematocrit in {window_ms:.3g} ms windows (case {scene['case']})")
     fig.tight_layout()
     return fig
 
