@@ -20,11 +20,6 @@ using namespace d3q19;
 
 namespace {
 
-void require(bool ok, const std::string& msg) {
-  if (!ok)
-    throw InputError(msg);
-}
-
 /** n zeroed values of `size` bytes each, 64-byte aligned. */
 void* allocate(std::size_t n, std::size_t size) {
   const std::size_t bytes = ((n * size + 63) / 64) * 64;
@@ -41,12 +36,6 @@ double lambda_of(double omega, const std::string& what) {
           what + ": the relaxation rate " + format_number(omega) +
               " lies outside the open range (0, 2); choose another value");
   return 1.0 - omega;
-}
-
-/** Second-order equilibrium (Qian et al. 1992) of population q. */
-double equilibrium(int q, double rho, const Vec3& u) {
-  const double cu = c[q][0] * u[0] + c[q][1] * u[1] + c[q][2] * u[2];
-  return w[q] * rho * (1.0 + 3.0 * cu + 4.5 * cu * cu - 1.5 * u.squaredNorm());
 }
 
 } // namespace

@@ -99,6 +99,36 @@ struct BoundarySpec {
   Vec3 velocity = Vec3::Zero();
 };
 
+/** Second-order equilibrium (Qian et al. 1992) of population q at density
+ *  rho and lattice velocity u. */
+inline double equilibrium(int q, double rho, const Vec3& u) {
+  const auto& cq = d3q19::c[q];
+  const double cu = cq[0] * u[0] + cq[1] * u[1] + cq[2] * u[2];
+  return d3q19::w[q] * rho * (1.0 + 3.0 * cu + 4.5 * cu * cu - 1.5 * u.squaredNorm());
+}
+
+/** An open face of the lattice (lb_open_boundary.cpp): the node plane at the
+ *  low or high end of `axis` takes, after every update, the populations of
+ *  the non-equilibrium extrapolation scheme (Guo, Zheng & Shi, Chin. Phys.
+ *  11, 366 (2002)): the equilibrium at the face's density and velocity plus
+ *  the non-equilibrium part of the next node inward. A velocity inlet gives
+ *  the velocity per node (the density is the inward neighbour's), a
+ *  pressure outlet the density (the velocity is the inward neighbour's). */
+struct OpenBoundarySpec {
+  int axis = 0;
+  bool high = false; ///< the face at the high end of the axis
+  bool pressure = false;
+  /// velocity inlet: 3 values (MD units) per node of the face plane, the two
+  /// other axes in increasing order, the second fastest
+  std::vector<double> velocity;
+  double density = 0.0; ///< pressure outlet (MD units)
+  /// velocity inlet with a flow rate (volume per time, MD units; 0: none):
+  /// the velocities are scaled by `gain`, which every update moves towards
+  /// the flow through the plane next to the face (lb_open_boundary.cpp)
+  double flow_rate = 0.0;
+  double gain = 1.0;
+};
+
 /** Post-collision = equilibrium + lambda (pre - equilibrium) per mode group;
  *  lambda = 1 - omega, omega the relaxation rate. */
 struct Relaxation {
@@ -171,6 +201,16 @@ public:
   // --- boundaries -------------------------------------------------------------
   /** Replaces all boundaries; nodes that become fluid start at rest at `dens`. */
   void set_boundaries(const std::vector<BoundarySpec>& boundaries);
+  /** Replaces the open faces (collective; checked: both faces of an axis
+   *  open or neither, the plane sizes). */
+  void set_open_boundaries(const std::vector<OpenBoundarySpec>& faces);
+  const std::vector<OpenBoundarySpec>& open_boundaries() const { return m_open; }
+  /** The flow-rate inlets' gains (a checkpoint keeps them). */
+  std::vector<double> open_boundary_gains() const;
+  void set_open_boundary_gains(const std::vector<double>& gains);
+  /** Mass flux (MD units: mass per time) into the lattice at open face i,
+   *  through the node plane next to the face; collective. */
+  double open_boundary_mass_flux(std::size_t i) const;
   /** Force of the fluid on boundary b in the last update (momentum exchange). */
   Vec3 boundary_force(int b) const;
   /** Over all ranks. */
@@ -413,6 +453,15 @@ private:
    *  the neighbours' ghosts, else ghosts folded into the neighbours' faces). */
   template <typename Real> void exchange_remote(Real* f, bool fill_ghosts) const;
   template <typename Real> void apply_bounce_back(Real* f) const;
+  /** The open faces' populations after an update (lb_open_boundary.cpp). */
+  void apply_open_boundaries();
+  /** Volume per time through the node plane next to open face `face`, into
+   *  the lattice (MD units); collective. */
+  double open_boundary_volume_flux(const OpenBoundarySpec& face) const;
+  /** Calls body(padded node, global node, plane offset) for each fluid node
+   *  of open face `face` that this rank owns. */
+  template <class Body> void for_each_open_node(const OpenBoundarySpec& face, Body&& body) const;
+  std::vector<OpenBoundarySpec> m_open;
   /** Where an update found a node out of the model's range. */
   struct BadNode {
     std::size_t node = 0;

@@ -865,6 +865,8 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
   m_swapped = even;
   halo_exchange(f, even);
   apply_bounce_back(f);
+  if (!m_open.empty())
+    apply_open_boundaries();
   if (field) { // every deposit is used: the field is empty again
     std::fill(m_field_valid.begin(), m_field_valid.end(), std::uint64_t{0});
     m_field_used = false;

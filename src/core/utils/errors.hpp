@@ -17,6 +17,12 @@ struct InputError : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/** Throws InputError(msg) unless ok (argument checks). */
+inline void require(bool ok, const std::string& msg) {
+  if (!ok)
+    throw InputError(msg);
+}
+
 /** The simulation state became unphysical (NaN, a violated constraint, a fluid
  *  speed past the lattice sound speed). The message says what, where, when;
  *  the fields say it for programs (lbmd.SimulationInstability's attributes):

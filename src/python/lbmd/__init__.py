@@ -35,6 +35,7 @@ from . import shapes
 from . import constraints
 from . import lb
 from . import lbboundaries
+from . import open_boundaries
 from . import vtk_output
 from . import units
 from . import checkpoint
@@ -74,5 +75,5 @@ if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
 __all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
-           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "units", "checkpoint",
+           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries", "units", "checkpoint",
            "rank", "size", "comm"]

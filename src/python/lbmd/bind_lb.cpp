@@ -11,6 +11,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <tuple>
+
 #include <string>
 
 namespace py = pybind11;
@@ -128,6 +130,20 @@ void bind_lb(py::module_& m) {
                specs.push_back({shape, vel});
              f.set_boundaries(specs);
            })
+      .def("set_open_boundaries",
+           // (axis, high, pressure, velocities (3 per face node), density,
+           // flow rate) per face
+           [](LBFluid& f,
+              const std::vector<std::tuple<int, bool, bool, std::vector<double>, double, double>>&
+                  faces) {
+             std::vector<lb::OpenBoundarySpec> specs;
+             for (const auto& [axis, high, pressure, velocity, density, flow_rate] : faces)
+               specs.push_back({axis, high, pressure, velocity, density, flow_rate, 1.0});
+             f.set_open_boundaries(specs);
+           })
+      .def("open_boundary_gains", &LBFluid::open_boundary_gains)
+      .def("set_open_boundary_gains", &LBFluid::set_open_boundary_gains)
+      .def("open_boundary_mass_flux", &LBFluid::open_boundary_mass_flux)
       .def("boundary_force", &LBFluid::boundary_force)
       .def("get_block", &get_block)
       .def("set_block", &set_block)

@@ -103,7 +103,8 @@ def system_state(system):
             arrays[f"{prefix}/fluid/{prop}"] = block.reshape(shape + (-1,))
         any_deposit, ledger_step, in_flight = fluid.coupling_ledger_state()
         fluid_state = {"n_updates": int(fluid.n_updates), "ledger": (bool(any_deposit), int(ledger_step),
-                                                                     tuple(in_flight))}
+                                                                     tuple(in_flight)),
+                       "open_gains": list(fluid.open_boundary_gains())}
     lang = core.langevin
     state = {k: v for k, v in system.__dict__.items() if k != "_core"}
     state["_checkpoint"] = {
@@ -178,6 +179,9 @@ def restore_system(system, state):
                                       f"the restored lattice {shape}")
             fluid.set_block(prop, [0, 0, 0], shape, np.ascontiguousarray(block, dtype=float).ravel())
         fluid.set_n_updates(saved["fluid"]["n_updates"])
+        gains = saved["fluid"].get("open_gains", [])
+        if gains and len(gains) == len(fluid.open_boundary_gains()):
+            fluid.set_open_boundary_gains(gains)
         any_deposit, ledger_step, in_flight = saved["fluid"]["ledger"]
         fluid.set_coupling_ledger_state(any_deposit, ledger_step, np.asarray(in_flight, dtype=float))
     core.time = saved["time"]

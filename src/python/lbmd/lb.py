@@ -68,6 +68,9 @@ class LBFluid(ParameterObject):
             v["seed"] = 0
         object.__setattr__(self, "_core", None)
         object.__setattr__(self, "_system", None)
+        from .open_boundaries import OpenBoundaries
+        #: velocity inlets and pressure outlets on the box's faces (lbmd.open_boundaries)
+        object.__setattr__(self, "open_boundaries", OpenBoundaries(self))
 
     def _restore_core(self):
         # made again when the unpickled System activates it (lbmd.checkpoint)
@@ -94,6 +97,7 @@ class LBFluid(ParameterObject):
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)
         object.__setattr__(self, "_system", system)
+        self.open_boundaries._apply()
 
     def _deactivate(self, system):
         system._core.set_lb(None)

@@ -110,6 +110,9 @@ class Integrator:
                                      Param("recalc_forces", "bool"), Param("reuse_forces", "bool")],
                   {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces})
         self._system._check_ready()
+        fluid = self._system._lb_fluid()
+        if fluid is not None and len(fluid.open_boundaries):
+            fluid.open_boundaries._before_run()
         if not self._system.__dict__.get("_settings_checked"):
             # once, at the first run: the scene's choices against their
             # measured limits, warnings only (system.check_settings())
@@ -354,6 +357,14 @@ class System:
 
     _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects",
                    "cell_checks", "cell_drift_tolerance"}
+
+    def _lb_fluid(self):
+        """The active LBFluid (Python object), or None."""
+        from .lb import LBFluid
+        for actor in self.__dict__.get("actors", ()):
+            if isinstance(actor, LBFluid):
+                return actor
+        return None
 
     def _core_fluid(self):
         """The active fluid's C++ object, or None."""
