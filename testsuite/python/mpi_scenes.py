@@ -32,6 +32,9 @@ where a subdomain starts, int(n k / K)):
 - crossing: cells with a body force 80x stronger, 300 steps: the cells
   move 4 lattice spacings (the one near the wall 2) across the cuts and
   the periodic boundary.
+- open_channel: 25x12x10, walls z = 1, 9, a Poiseuille velocity inlet at a
+  flow rate on x- and a pressure outlet on x+ (lbmd.open_boundaries); cuts
+  x as fluid.
 - bifurcation: samples/cell_flow_in_bifurcation.py's default scene with 6
   RBCs (160x40x16, the body force given: no calibration run) run in this
   process with --cycles 2 --steps STEPS/2;
@@ -190,13 +193,30 @@ def run_bifurcation(steps, node_grid):
                 text={"sample_stdout": "\n".join(table), "cells_csv": csv_text}, folder=folder)
 
 
+def scene_open_channel(node_grid):
+    """A channel along x between walls z = 1, 9, a Poiseuille inlet at a
+    flow rate (its controller's gain is a sum over the face) on x- and a
+    pressure outlet on x+."""
+    from lbmd.open_boundaries import PressureOutlet, VelocityInlet
+    box = (25.0, 12.0, 10.0)
+    system = new_system(box, node_grid)
+    lbf = lb.LBFluid(agrid=AGRID, dens=DENS, visc=VISC, tau=TAU)
+    system.actors.add(lbf)
+    for wall in (shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-9.0)):
+        system.lbboundaries.add(lbboundaries.LBBoundary(shape=wall))
+    lbf.open_boundaries.add(VelocityInlet(face="x-", profile="poiseuille", flow_rate=20.0))
+    lbf.open_boundaries.add(PressureOutlet(face="x+", density=DENS))
+    return dict(system=system, lbf=lbf, cells=[], force=np.zeros(3))
+
+
 SCENES = {"fluid": lambda grid: scene_fluid(grid),
           "fluid_thermal": lambda grid: scene_fluid(grid, thermal=True),
           "boundaries": scene_boundaries,
           "boundaries_single": lambda grid: scene_boundaries(grid, single_precision=True),
           "cells": scene_cells,
           "cells_thermal": scene_cells_thermal,
-          "crossing": scene_crossing}
+          "crossing": scene_crossing,
+          "open_channel": scene_open_channel}
 ALL_SCENES = tuple(SCENES) + ("bifurcation",)
 
 

@@ -37,7 +37,7 @@ MPIRUN = shutil.which("mpirun") or shutil.which("mpiexec")
 SCENE_SCRIPT = os.path.join(HERE, "mpi_scenes.py")
 
 RANKS = (2, 3, 4)
-STEPS = {"fluid": 40, "fluid_thermal": 40, "boundaries": 60, "boundaries_single": 60, "cells": 100, "cells_thermal": 100, "crossing": 300,
+STEPS = {"fluid": 40, "fluid_thermal": 40, "boundaries": 60, "boundaries_single": 60, "cells": 100, "cells_thermal": 100, "crossing": 300, "open_channel": 100,
          "bifurcation": 200}
 KT_THERMAL = 1e-3          # mpi_scenes.scene_fluid(thermal=True)
 KT_CELLS = 1e-4            # mpi_scenes.scene_cells_thermal
@@ -251,6 +251,14 @@ class MpiEquality(unittest.TestCase):
         scale = np.abs(ref["fluid_velocity"][fluid]).max()
         self.assertGreater(diff, 1e-9 * scale)
         self.assertLess(diff, 1e-4 * scale)
+
+    def test_open_channel(self):
+        def sane(r):
+            fluid = r["fluid_boundary"] == 0
+            self.assertGreater(r["fluid_velocity"][..., 0][fluid].mean(), 0.0, "no flow from the inlet")
+            rho = r["fluid_density"][:, 6, 5]
+            self.assertGreater(rho[1], rho[-2], "no pressure drop from inlet to outlet")
+        self.check_scene("open_channel", sane)
 
     def test_cells(self):
         self.check_scene("cells", lambda r: self.check_cells(r, volume_rtol=0.01, surface_rtol=0.01, min_shift=0.0))
