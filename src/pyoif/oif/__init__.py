@@ -9,6 +9,8 @@ and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
 - ``oif.mesh_files(name)``: the shipped meshes (spheres and Evans-Fung
   red blood cells, see ``oif/meshes/README.md``),
 - ``oif.seed_cells``: random non-overlapping placement of many cells,
+- ``oif.CellFlow``: cells leaving at an outlet and entering at an inlet
+  (a haematocrit, a rate, or recycled), between runs,
 - ``oif.stretch_cell``: the optical-tweezers stretch of a red blood cell
   (Mills et al. 2004), equilibrium diameters against force,
 - ``oif.CellSeries``: VTK XML time series of cells (``.vtp`` steps and a
@@ -22,6 +24,7 @@ from . import oif_utils  # noqa: F401
 from .oif_utils import (output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore,  # noqa: F401
                         output_vtk_lines)
 from .seeding import seed_cells, SeedingError  # noqa: F401
+from .flow_through import CellFlow  # noqa: F401
 from . import stretching  # noqa: F401
 from .stretching import stretch_cell  # noqa: F401
 from .vtk_series import CellSeries  # noqa: F401
@@ -45,4 +48,4 @@ def mesh_files(name):
 
 __all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbors", "Mesh", "OifCellType",
            "OifCell", "oif_utils", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
-           "output_vtk_lines", "seed_cells", "SeedingError", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]
+           "output_vtk_lines", "seed_cells", "SeedingError", "CellFlow", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

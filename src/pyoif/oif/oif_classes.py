@@ -873,6 +873,12 @@ class OifCell:
         self.__dict__.update(state)
         _CELLS.add(self)
 
+    def remove(self):
+        """Takes the cell out of the simulation: its particles go, and with
+        them its bonds and exclusions (e.g. at an outlet, oif.CellFlow). The
+        object keeps its parameters; its geometry can no longer be read."""
+        self.mesh._live_parts().remove()
+
     def _discard(self):
         """Removes the cell's particles (and so their bonds and exclusions)
         while an error is being raised: a failure here must not hide it."""
