@@ -388,6 +388,25 @@ class System:
         if v["time_step"] is not None:
             self.time_step = v["time_step"]
 
+    def _check_box_change(self, box):
+        """Refuse a box the fluid or the cells already made cannot follow."""
+        from .lb import LBFluid
+        if not np.array_equal(box, self.box_l) and any(isinstance(a, LBFluid) for a in self.actors):
+            raise ValueError(f"System: parameter 'box_l' cannot change while a lattice-Boltzmann fluid is "
+                             f"active (its lattice was made for box_l {self.box_l.tolist()}); remove the "
+                             f"fluid (system.actors.remove), change the box, add a new fluid")
+        try:
+            import oif
+        except ImportError:
+            return
+        for cell in oif.oif_classes.live_cells(self):
+            try:
+                oif.oif_classes.check_periodic_extent(
+                    "System", self, cell.mesh.positions(), cell.cell_type.mesh.max_edge_length(),
+                    what=f"cell {cell.cell_id}", box=box)
+            except ValueError as e:
+                raise ValueError(f"System: parameter 'box_l' {box.tolist()} does not fit the cells: {e}") from None
+
     def _check_ready(self):
         if not self._time_step_set:
             raise RuntimeError("System: set system.time_step before integrating")
@@ -397,6 +416,7 @@ class System:
             v = parse("System", [Param("box_l", "vec3")], {"box_l": value})["box_l"]
             if not np.all(v > 0):
                 raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {value!r}")
+            self._check_box_change(v)
             self._core.box_l = v
         elif name == "periodicity":
             self._core.periodicity = parse("System", [Param("periodicity", "bool3")],
