@@ -504,6 +504,26 @@ def lb_not_added(sc):
     fluid().shape
 
 
+@case("lbf.get_interpolated_velocity(...) of a fluid not added (no actor)", RuntimeError, "actors.add")
+def lb_velocity_not_added(sc):
+    fluid().get_interpolated_velocity([1, 1, 1])
+
+
+@case("actors.add('lbf'): not an actor", TypeError, "not an actor")
+def lb_add_not_actor(sc):
+    sc.system.actors.add("lbf")
+
+
+@case("actors.remove(lbf) of a fluid never added", ValueError, "not active")
+def lb_remove_not_added(sc):
+    sc.system.actors.remove(fluid())
+
+
+@case("LBFluid(n_threads=100000): absurdly many threads", ValueError, "n_threads")
+def lb_threads(sc):
+    fluid(n_threads=100000)
+
+
 @case("a coupled particle outside a non-periodic box (z = 7.5 in a box of 6)", lbmd.SimulationInstability,
       "particle 0", "non-periodic axis 2", "left the box")
 def lb_particle_outside_box(sc):
@@ -622,6 +642,27 @@ def cell_types_density_one_gamma(sc):
     s.thermostat.set_lb(LB_fluid=lbf, gamma=0.05)
     s.integrator.run(0)
     return cells
+
+
+@case("seed_cells(..., haematocrit=1.5)", ValueError, "haematocrit", "(0, 1)", scene="cell")
+def seed_haematocrit(sc):
+    oif.seed_cells(sc.system, sc.cell_type, haematocrit=1.5, seed=1)
+
+
+@case("seed_cells(..., counts=2, haematocrit=0.1): both", TypeError, "exactly one", scene="cell")
+def seed_counts_and_haematocrit(sc):
+    oif.seed_cells(sc.system, sc.cell_type, counts=2, haematocrit=0.1, seed=1)
+
+
+@case("seed_cells(..., counts=500): more cells than the box holds", oif.SeedingError, "cannot be placed",
+      scene="cell")
+def seed_too_many(sc):
+    oif.seed_cells(sc.system, sc.cell_type, counts=500, seed=1)
+
+
+@case("seed_cells(..., boundaries=['wall']): not a shape", TypeError, "boundaries", scene="cell")
+def seed_boundary_not_shape(sc):
+    oif.seed_cells(sc.system, sc.cell_type, counts=1, boundaries=["wall"], seed=1)
 
 
 @case("system.box_l = [3.5, 3.5, 3.5] once a cell 4 wide exists (it would overlap its own periodic image)",
