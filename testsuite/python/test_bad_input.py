@@ -671,6 +671,20 @@ def cell_change_box(sc):
     sc.system.box_l = [3.5, 3.5, 3.5]
 
 
+@case("system.periodicity = [True, True, True] with a cell wider than the box along a non-periodic z",
+      ValueError, "periodicity", "cell 0", "own periodic image")
+def cell_change_periodicity(sc):
+    s = lbmd.System(box_l=[12, 12, 3], periodicity=[True, True, False])
+    s.time_step = 0.1
+    ct = oif.OifCellType(*SPHERE, system=s, resize=(2.0,) * 3, ks=0.01)
+    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[6, 6, 1.5])
+    try:
+        s.periodicity = [True, True, True]
+    finally:
+        assert list(s.periodicity) == [True, True, False], "the refused periodicity was applied"
+        del cell
+
+
 # --- mesh files ----------------------------------------------------------------
 @case("an empty nodes file", ValueError, "nodes.dat", "no data")
 def mesh_empty(sc):

@@ -85,7 +85,7 @@ def _node_ids(owner, name, ids, n):
     return [int(i) for i in ids]
 
 
-def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box=None):
+def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box=None, periodic=None):
     """Raise ValueError, before anything is added, for a cell the engine
     cannot represent on a periodic axis: one at least a box length wide
     overlaps its own periodic image, and a mesh whose edges reach a quarter
@@ -95,9 +95,10 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box
     positions jumped). Cells between half and a whole box length are fine:
     the membrane pass takes a cell's nodes unfolded, relative to its first
     node (src/core/interactions/membrane/membrane_model.hpp). box: a box
-    length to check against other than the system's (a box change)."""
+    length and periodicity to check against other than the system's (a
+    change of them)."""
     box = np.asarray(system.box_l if box is None else box, dtype=float)
-    periodic = np.asarray(system.periodicity, dtype=bool)
+    periodic = np.asarray(system.periodicity if periodic is None else periodic, dtype=bool)
     extent = pos.max(axis=0) - pos.min(axis=0)
     for axis in range(3):
         if not periodic[axis]:

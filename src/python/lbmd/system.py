@@ -395,6 +395,11 @@ class System:
             raise ValueError(f"System: parameter 'box_l' cannot change while a lattice-Boltzmann fluid is "
                              f"active (its lattice was made for box_l {self.box_l.tolist()}); remove the "
                              f"fluid (system.actors.remove), change the box, add a new fluid")
+        self._check_cells_fit("box_l", box, box, self.periodicity)
+
+    def _check_cells_fit(self, name, value, box, periodic):
+        """Refuse a box or periodicity in which a cell the script holds would
+        overlap its own periodic image."""
         try:
             import oif
         except ImportError:
@@ -403,9 +408,10 @@ class System:
             try:
                 oif.oif_classes.check_periodic_extent(
                     "System", self, cell.mesh.positions(), cell.cell_type.mesh.max_edge_length(),
-                    what=f"cell {cell.cell_id}", box=box)
+                    what=f"cell {cell.cell_id}", box=box, periodic=periodic)
             except ValueError as e:
-                raise ValueError(f"System: parameter 'box_l' {box.tolist()} does not fit the cells: {e}") from None
+                raise ValueError(f"System: parameter '{name}' {np.asarray(value).tolist()} does not fit "
+                                 f"the cells: {e}") from None
 
     def _check_ready(self):
         if not self._time_step_set:
@@ -419,8 +425,9 @@ class System:
             self._check_box_change(v)
             self._core.box_l = v
         elif name == "periodicity":
-            self._core.periodicity = parse("System", [Param("periodicity", "bool3")],
-                                           {"periodicity": value})["periodicity"]
+            v = parse("System", [Param("periodicity", "bool3")], {"periodicity": value})["periodicity"]
+            self._check_cells_fit("periodicity", v, self.box_l, v)
+            self._core.periodicity = v
         elif name == "time_step":
             dt = parse("System", [Param("time_step", "float", check=positive)],
                        {"time_step": value})["time_step"]
