@@ -19,7 +19,7 @@ and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
 import os as _os
 
 from .oif_classes import (FixedPoint, PartPoint, Edge, Triangle, Angle, ThreeNeighbors, Mesh,  # noqa: F401
-                          OifCellType, OifCell)
+                          OifCellType, OifCell, OverlapWarning)
 from . import oif_utils  # noqa: F401
 from .oif_utils import (output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore,  # noqa: F401
                         output_vtk_lines)
@@ -46,6 +46,6 @@ def mesh_files(name):
     return nodes, _os.path.join(MESH_DIR, f"{name}triangles.dat")
 
 
-__all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbors", "Mesh", "OifCellType",
+__all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbors", "Mesh", "OifCellType", "OverlapWarning",
            "OifCell", "oif_utils", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
            "output_vtk_lines", "seed_cells", "SeedingError", "CellFlow", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

@@ -2,7 +2,8 @@
 
 A cell type's relaxed shape is a closed, orientable 2-manifold: every edge is
 shared by exactly two triangles, the triangles around every node form one fan,
-no node is unused or duplicated, no triangle is degenerate. ``read_mesh``
+no node is unused or duplicated, no triangle is degenerate, no edge passes
+through a triangle (the surface does not cross itself). ``read_mesh``
 checks all of that and reports the offending file and line, and (with
 ``check_orientation``) makes the orientation of all triangles consistent.
 
@@ -325,6 +326,50 @@ def check_mesh(data, check_orientation=True):
     # except for a 2-triangle "pillow", excluded by len(tris) >= 4 and connectivity below.
     _check_vertex_fans(data, edges, he_edge)
     _orient(data, he_edge, check_orientation)
+    _check_self_intersection(data, edges)
+
+
+def _check_self_intersection(data, edges):
+    """Raise ValueError if an edge passes through a triangle that does not
+    share one of its nodes (the surface crosses itself). Only the pairs
+    whose midpoint and centroid are close enough to touch are tested
+    (a k-d tree), then a vectorised Moeller-Trumbore test."""
+    from scipy.spatial import cKDTree
+    nodes, tris = data.nodes, data.triangles
+    a, b = nodes[edges[:, 0]], nodes[edges[:, 1]]
+    corners = nodes[tris]
+    centroid = corners.mean(axis=1)
+    reach = 0.5 * np.linalg.norm(b - a, axis=1).max() + \
+        np.linalg.norm(corners - centroid[:, None], axis=2).max()
+    near = cKDTree(centroid).query_ball_point(0.5 * (a + b), reach)
+    counts = np.fromiter((len(x) for x in near), dtype=np.int64, count=len(near))
+    if not counts.sum():
+        return
+    e = np.repeat(np.arange(len(edges)), counts)
+    t = np.fromiter((k for x in near for k in x), dtype=np.int64, count=int(counts.sum()))
+    shares = np.any(tris[t] == edges[e, 0][:, None], axis=1) | np.any(tris[t] == edges[e, 1][:, None], axis=1)
+    e, t = e[~shares], t[~shares]
+    p0, d = a[e], b[e] - a[e]
+    v0, e1, e2 = corners[t, 0], corners[t, 1] - corners[t, 0], corners[t, 2] - corners[t, 0]
+    pv = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, pv)
+    scale = np.linalg.norm(d, axis=1) * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+    ok = np.abs(det) > 1e-12 * scale  # not parallel to the triangle's plane
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    sv = p0 - v0
+    u = np.einsum("ij,ij->i", sv, pv) * inv
+    q = np.cross(sv, e1)
+    v = np.einsum("ij,ij->i", d, q) * inv
+    w = np.einsum("ij,ij->i", e2, q) * inv  # where along the edge (0..1)
+    tol = 1e-9
+    hit = np.nonzero(ok & (u > tol) & (v > tol) & (u + v < 1 - tol) & (w > tol) & (w < 1 - tol))[0]
+    if hit.size:
+        k = hit[0]
+        i, j = edges[e[k]]
+        raise ValueError(f"{data.triangle_at(t[k])}: the surface intersects itself: the edge between "
+                         f"nodes {data.ids(i)} and {data.ids(j)} ({data.nodes_file}, {data.node_ref(i)} "
+                         f"and {data.node_ref(j)}) passes through triangle {data.ids(tris[t[k]])}; the "
+                         f"mesh must not cross itself")
 
 
 def _check_vertex_fans(data, edges, he_edge):

@@ -85,7 +85,7 @@ def _node_ids(owner, name, ids, n):
     return [int(i) for i in ids]
 
 
-def check_periodic_extent(owner, system, pos, longest_edge, what="the cell"):
+def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box=None, periodic=None):
     """Raise ValueError, before anything is added, for a cell the engine
     cannot represent on a periodic axis: one at least a box length wide
     overlaps its own periodic image, and a mesh whose edges reach a quarter
@@ -94,9 +94,11 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell"):
     would cut (the membrane pass falls back to it for a cell whose unfolded
     positions jumped). Cells between half and a whole box length are fine:
     the membrane pass takes a cell's nodes unfolded, relative to its first
-    node (src/core/interactions/membrane/membrane_model.hpp)."""
-    box = np.asarray(system.box_l, dtype=float)
-    periodic = np.asarray(system.periodicity, dtype=bool)
+    node (src/core/interactions/membrane/membrane_model.hpp). box: a box
+    length and periodicity to check against other than the system's (a
+    change of them)."""
+    box = np.asarray(system.box_l if box is None else box, dtype=float)
+    periodic = np.asarray(system.periodicity if periodic is None else periodic, dtype=bool)
     extent = pos.max(axis=0) - pos.min(axis=0)
     for axis in range(3):
         if not periodic[axis]:
@@ -116,6 +118,61 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell"):
 # ---------------------------------------------------------------------------
 # point / edge / triangle / angle views (PyOIF API)
 # ---------------------------------------------------------------------------
+class OverlapWarning(UserWarning):
+    """A new OifCell placed over another cell or inside a wall (the run
+    would stop with membrane_crossing or wall_penetration, or push the
+    membranes apart violently)."""
+
+
+def _winding(points, nodes, triangles):
+    """Per point: |winding number| of the closed surface (about 1 inside,
+    0 outside); Van Oosterom and Strackee's solid angle per triangle, in
+    blocks of points to bound the memory."""
+    out = np.zeros(len(points))
+    corners = [nodes[triangles[:, k]] for k in range(3)]
+    for start in range(0, len(points), 32):
+        p = points[start:start + 32, None]
+        a, b, c = (x[None] - p for x in corners)
+        la, lb, lc = (np.linalg.norm(v, axis=2) for v in (a, b, c))
+        num = np.einsum("pti,pti->pt", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("pti,pti->pt", a, b) * lc + np.einsum("pti,pti->pt", b, c) * la
+               + np.einsum("pti,pti->pt", c, a) * lb)
+        out[start:start + 32] = np.abs(np.arctan2(num, den).sum(axis=1)) / (2 * np.pi)
+    return out
+
+
+def _warn_overlaps(owner, system, pos, triangles, cell_id):
+    """Warn (OverlapWarning) when nodes of a new cell lie inside an existing
+    cell or that cell's nodes inside the new one, or the new cell's nodes
+    inside a non-penetrable constraint's shape. Cheap: bounding boxes first,
+    then a winding number only for the nodes in the other cell's box;
+    periodic images are not looked at."""
+    import warnings
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    hits = []
+    for c in live_cells(system):
+        other = c.mesh.positions()
+        olo, ohi = other.min(axis=0), other.max(axis=0)
+        if np.any(olo > hi) or np.any(ohi < lo):
+            continue
+        mine = pos[np.all((pos >= olo) & (pos <= ohi), axis=1)]
+        theirs = other[np.all((other >= lo) & (other <= hi), axis=1)]
+        if (len(mine) and np.any(_winding(mine, other, c.cell_type.mesh._topo.triangles) > 0.5)) or \
+                (len(theirs) and np.any(_winding(theirs, pos, triangles) > 0.5)):
+            hits.append(f"cell {c.cell_id}")
+    for k, con in enumerate(system.constraints):
+        shape = getattr(con, "shape", None)
+        if shape is None or getattr(con, "penetrable", False):
+            continue
+        n_in = sum(shape.is_inside(p) for p in pos)
+        if n_in:
+            hits.append(f"constraint {k} ({type(shape).__name__}, {n_in} of its nodes inside)")
+    if hits:
+        warnings.warn(f"{owner}: the new cell (cell_id {cell_id}) overlaps " + ", ".join(hits)
+                      + "; place it elsewhere (oif.seed_cells places cells without overlaps)",
+                      OverlapWarning, stacklevel=3)
+
+
 class FixedPoint:
     """A mesh node not connected to a particle (the cell type's relaxed mesh)."""
 
@@ -848,6 +905,7 @@ class OifCell:
             raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
         pos = cell_type.mesh._placed_positions(origin, rotate)
         check_periodic_extent(owner, system, pos, cell_type.mesh.max_edge_length())
+        _warn_overlaps(owner, system, pos, cell_type.mesh._topo.triangles, cell_id)
         self.cell_type = cell_type
         self.system = system
         self.cell_id = cell_id

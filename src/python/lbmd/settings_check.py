@@ -70,6 +70,9 @@ COUPLING_ADVISED, COUPLING_FAILED = 1.0, 1.4
 #: than the mesh's edges, up to 2 nN per cell and haematocrit 0.42); the
 #: paper's a = 1e-4 acted like no contact at all
 CONTACT_A_MIN = 0.1
+#: cell types under one coupling gamma whose node densities (nodes per
+#: surface) differ by more than this factor feel a different friction per area
+NODE_DENSITY_RATIO_MAX = 2.0
 
 
 class Setting:
@@ -229,6 +232,20 @@ def _cell_settings(system, fluid, gamma, report):
                     f"advised < {COUPLING_ADVISED}; the fluid blew up from {COUPLING_FAILED}",
                     "stable" if density < COUPLING_ADVISED else "near the coupling's stability limit",
                     ok=density < COUPLING_ADVISED))
+    # one gamma for cell types of different node density: the friction per
+    # membrane area (gamma N / S) differs by their ratio
+    if gamma and len(types) > 1:
+        dens = sorted((ct.mesh.get_n_nodes() / ct.surface0, ct.mesh.get_n_nodes(), ct.surface0)
+                      for ct, _ in types.values())
+        lo, hi = dens[0], dens[-1]
+        ratio = hi[0] / lo[0]
+        report.append(Setting(
+            "cell types under one gamma: node density ratio", f"{ratio:.3g}",
+            f"< {NODE_DENSITY_RATIO_MAX:g} (nodes per surface: {hi[1]} nodes on {hi[2]:.4g} against "
+            f"{lo[1]} nodes on {lo[2]:.4g})",
+            "the denser cell type feels that much more friction per area from the fluid: "
+            "use meshes of similar node density (the coupling has one gamma for all particles)",
+            ok=ratio < NODE_DENSITY_RATIO_MAX))
     # contacts between the cells' particle types
     cell_types = sorted({int(t) for c in cells for t in np.unique(c.particles.type)})
     if len(cells) > 1:

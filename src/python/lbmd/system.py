@@ -399,6 +399,31 @@ class System:
         if v["time_step"] is not None:
             self.time_step = v["time_step"]
 
+    def _check_box_change(self, box):
+        """Refuse a box the fluid or the cells already made cannot follow."""
+        from .lb import LBFluid
+        if not np.array_equal(box, self.box_l) and any(isinstance(a, LBFluid) for a in self.actors):
+            raise ValueError(f"System: parameter 'box_l' cannot change while a lattice-Boltzmann fluid is "
+                             f"active (its lattice was made for box_l {self.box_l.tolist()}); remove the "
+                             f"fluid (system.actors.remove), change the box, add a new fluid")
+        self._check_cells_fit("box_l", box, box, self.periodicity)
+
+    def _check_cells_fit(self, name, value, box, periodic):
+        """Refuse a box or periodicity in which a cell the script holds would
+        overlap its own periodic image."""
+        try:
+            import oif
+        except ImportError:
+            return
+        for cell in oif.oif_classes.live_cells(self):
+            try:
+                oif.oif_classes.check_periodic_extent(
+                    "System", self, cell.mesh.positions(), cell.cell_type.mesh.max_edge_length(),
+                    what=f"cell {cell.cell_id}", box=box, periodic=periodic)
+            except ValueError as e:
+                raise ValueError(f"System: parameter '{name}' {np.asarray(value).tolist()} does not fit "
+                                 f"the cells: {e}") from None
+
     def _check_ready(self):
         if not self._time_step_set:
             raise RuntimeError("System: set system.time_step before integrating")
@@ -408,10 +433,12 @@ class System:
             v = parse("System", [Param("box_l", "vec3")], {"box_l": value})["box_l"]
             if not np.all(v > 0):
                 raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {value!r}")
+            self._check_box_change(v)
             self._core.box_l = v
         elif name == "periodicity":
-            self._core.periodicity = parse("System", [Param("periodicity", "bool3")],
-                                           {"periodicity": value})["periodicity"]
+            v = parse("System", [Param("periodicity", "bool3")], {"periodicity": value})["periodicity"]
+            self._check_cells_fit("periodicity", v, self.box_l, v)
+            self._core.periodicity = v
         elif name == "time_step":
             dt = parse("System", [Param("time_step", "float", check=positive)],
                        {"time_step": value})["time_step"]
