@@ -11,6 +11,7 @@ packages=(
   libgtest-dev googletest
   python3 python3-dev python3-numpy python3-mpi4py python3-h5py
   python3-vtk9 python3-matplotlib python3-meshio python3-pybind11 python3-scipy python3-tqdm
+  python3-ezdxf python3-svgelements python3-pil
 )
 
 missing=()
