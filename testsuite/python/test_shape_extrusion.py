@@ -135,6 +135,15 @@ class Exactness(unittest.TestCase):
         self.assertLessEqual(np.abs(dist - cdist).max(), tol + 1e-12)
         self.assertGreater(np.abs(dist - cdist).max(), 0.1 * tol)  # really a polygon
 
+    def test_many_edges(self):
+        """A deep hierarchy: a wavy outline of 2000 edges with a wavy hole."""
+        t = 2 * math.pi * np.arange(2000) / 2000
+        r = 10 + 2 * np.sin(7 * t)
+        outer = np.stack([r * np.cos(t), r * np.sin(t)], 1)
+        hole = 0.4 * outer[::-4]
+        shape = self.compare([outer, hole], [0.0, 5.0], n=600)
+        self.assertEqual(shape._core.num_edges(), 2500)
+
     def test_bounding_box_and_surface(self):
         shape = shapes.Extrusion(polygons=[L_SHAPE], z=[1, 2])
         self.assertEqual(shape.calc_dist([1, 1, 1.5])[0], -min(1, 0.5))
@@ -168,13 +177,26 @@ class Layouts(unittest.TestCase):
         msp.add_arc((15, 5), 1, -90, 90, dxfattribs={"layer": "chip"})
         msp.add_line((15, 6), (11, 6), dxfattribs={"layer": "chip"})
         msp.add_arc((11, 5), 1, 90, 270, dxfattribs={"layer": "chip"})
+        # an elliptic hole, a POLYLINE island beside, a closed SPLINE island
+        msp.add_ellipse((15, 8.5), major_axis=(2, 0), ratio=0.25, dxfattribs={"layer": "chip"})
+        msp.add_polyline2d([(22, 1), (28, 1), (28, 3), (22, 3)], close=True, dxfattribs={"layer": "chip"})
+        spline = msp.add_spline(dxfattribs={"layer": "chip"})
+        spline.set_closed([(22, 5, 0), (26, 5, 0), (26, 9, 0), (22, 9, 0)])
         msp.add_text("label", dxfattribs={"layer": "chip"})
         msp.add_line((100, 100), (110, 100), dxfattribs={"layer": "notes"})
         doc.saveas(self.path("chip.dxf"))
         tol = 1e-3
         shape = shapes.Extrusion.from_dxf(self.path("chip.dxf"), layer="chip", z=[0, 3], tolerance=tol,
                                           scale=0.5, origin=(1, 1))
-        self.assertEqual(len(shape.polygons), 3)
+        self.assertEqual(len(shape.polygons), 6)
+        at = lambda x, y: [1 + 0.5 * x, 1 + 0.5 * y, 1.5]  # noqa: E731 (file units to the shape's)
+        self.assertFalse(shape.is_inside(at(15, 8.5)))   # in the ellipse
+        self.assertTrue(shape.is_inside(at(15, 9.2)))    # beside it
+        self.assertAlmostEqual(shape.calc_dist(at(15, 9.3))[0], -0.5 * 0.3, delta=0.5 * tol + 1e-12)
+        self.assertTrue(shape.is_inside(at(25, 2)))      # the POLYLINE
+        self.assertAlmostEqual(shape.calc_dist(at(25, 2))[0], -0.5 * 1, delta=1e-12)
+        self.assertTrue(shape.is_inside(at(24, 7)))      # the spline's inside
+        self.assertFalse(shape.is_inside(at(24, 10.5)))
         self.assertTrue(shape.is_inside([1 + 0.5 * 1, 1 + 0.5 * 1, 1]))
         self.assertFalse(shape.is_inside([1 + 0.5 * 5, 1 + 0.5 * 5, 1]))  # in the circle
         self.assertFalse(shape.is_inside([1 + 0.5 * 13, 1 + 0.5 * 5, 1]))  # in the slot

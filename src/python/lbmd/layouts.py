@@ -118,12 +118,17 @@ def read_dxf(path, layer=None, scale=1.0, tolerance=0.01, origin=(0.0, 0.0)):
             p = dxf_path.make_path(e)
         except (TypeError, ValueError, ezdxf.DXFError) as err:
             raise ValueError(f"{owner}: '{path}': {name} cannot be read: {err}") from None
-        for sub in p.sub_paths():
-            pts = np.array([(v.x, v.y) for v in sub.flattening(tolerance, segments=16)], dtype=float)
+        if kind == "SPLINE":
+            # ezdxf 0.18's make_path mistakes a closed (periodic) spline's knots;
+            # the B-spline itself flattens right
+            flat = [list(e.construction_tool().flattening(tolerance, segments=16))]
+        else:
+            flat = [list(sub.flattening(tolerance, segments=16)) for sub in p.sub_paths()]
+        for points in flat:
+            pts = np.array([(v.x, v.y) for v in points], dtype=float)
             if len(pts) < 2:
                 continue
-            closed = (kind in ("CIRCLE", "ELLIPSE") and sub.start.isclose(sub.end)) \
-                or getattr(e, "closed", False) or getattr(e, "is_closed", False) \
+            closed = getattr(e, "closed", False) or getattr(e, "is_closed", False) \
                 or (kind != "LINE" and len(pts) > 2 and np.linalg.norm(pts[0] - pts[-1]) <= tolerance)
             if closed:
                 loops.append(_drop_closing(pts))
