@@ -210,6 +210,29 @@ class Layouts(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"chip\.dxf.*no closed contour on layer 'nothing'"):
             shapes.Extrusion.from_dxf(self.path("chip.dxf"), layer="nothing", z=[0, 1])
 
+    def test_dxf_flattening_tolerance(self):
+        """Curves flattened with vertices on the curve and chords no farther
+        than tolerance from it: a CIRCLE, a circle of two bulges, the same
+        mirrored (extrusion (0, 0, -1): x -> -x in the world frame)."""
+        import ezdxf
+        doc = ezdxf.new()
+        msp = doc.modelspace()
+        msp.add_circle((0, 0), 10)
+        msp.add_lwpolyline([(20, 0, 0, 0, 1.0), (30, 0, 0, 0, 1.0)], format="xyseb", close=True)
+        msp.add_lwpolyline([(20, 0, 0, 0, -1.0), (30, 0, 0, 0, -1.0)], format="xyseb", close=True,
+                           dxfattribs={"extrusion": (0, 0, -1)})
+        doc.saveas(self.path("circles.dxf"))
+        for tol in (1e-2, 1e-6):
+            shape = shapes.Extrusion.from_dxf(self.path("circles.dxf"), z=[0, 1], tolerance=tol)
+            for (cx, r), poly in zip([(0, 10), (25, 5), (-25, 5)], shape.polygons):
+                radius = np.hypot(poly[:, 0] - cx, poly[:, 1])
+                mid = 0.5 * (poly + np.roll(poly, -1, 0))
+                sagitta = r - np.hypot(mid[:, 0] - cx, mid[:, 1])
+                np.testing.assert_allclose(radius, r, atol=1e-12)
+                self.assertLessEqual(sagitta.max(), tol * (1 + 1e-9))
+                self.assertGreater(sagitta.max(), 0.3 * tol)  # not finer than asked
+                self.assertAlmostEqual(shape.calc_dist([cx, 0, 0.5])[0], -0.5, delta=1e-12)
+
     def test_dxf_errors(self):
         import ezdxf
         doc = ezdxf.new()
@@ -253,6 +276,12 @@ class Layouts(unittest.TestCase):
         self.assertTrue(shape.is_inside([10, 5, 0.5]))
         self.assertFalse(shape.is_inside([28, 10, 0.5]))  # in the blob (a hole)
         self.assertTrue(shape.is_inside([34, 10, 0.5]))   # right of the blob's apex x = 32.5
+        # the circle's vertices on the circle, chords within tol of it
+        circle_poly = min(shape.polygons, key=lambda p: np.ptp(p[:, 0]))
+        radius = np.hypot(circle_poly[:, 0] - 10, circle_poly[:, 1] - 15)
+        np.testing.assert_allclose(radius, 3.0, atol=1e-9)
+        mid = 0.5 * (circle_poly + np.roll(circle_poly, -1, 0))
+        self.assertLessEqual((3.0 - np.hypot(mid[:, 0] - 10, mid[:, 1] - 15)).max(), tol * (1 + 1e-9))
         with open(self.path("bad.svg"), "w") as f:
             f.write("<svg><rect")
         with self.assertRaisesRegex(ValueError, r"bad\.svg' is not a readable SVG file"):

@@ -41,9 +41,11 @@ def _placement(owner, scale, tolerance, origin):
 
 
 def _drop_closing(points):
-    """An (N, 2) array without the last vertex where it repeats the first."""
+    """An (N, 2) array without the last vertex where it repeats the first (to
+    rounding: a full ellipse's end is 1e-15 off its start)."""
     points = np.asarray(points, dtype=float)
-    if len(points) > 1 and np.array_equal(points[0], points[-1]):
+    extent = np.ptp(points, axis=0).max() if len(points) else 0.0
+    if len(points) > 1 and np.linalg.norm(points[0] - points[-1]) <= 1e-12 * extent:
         points = points[:-1]
     return points
 
@@ -118,10 +120,17 @@ def read_dxf(path, layer=None, scale=1.0, tolerance=0.01, origin=(0.0, 0.0)):
             p = dxf_path.make_path(e)
         except (TypeError, ValueError, ezdxf.DXFError) as err:
             raise ValueError(f"{owner}: '{path}': {name} cannot be read: {err}") from None
-        if kind == "SPLINE":
-            # ezdxf 0.18's make_path mistakes a closed (periodic) spline's knots;
-            # the B-spline itself flattens right
+        # ezdxf 0.18's paths approximate arcs by Bezier curves (2.7e-4 radius
+        # off, whatever the tolerance) and mistake a closed spline's knots:
+        # curves are flattened from the entities themselves
+        if kind in ("CIRCLE", "ARC"):
+            flat = [list(e.flattening(tolerance))]
+        elif kind == "ELLIPSE":
+            flat = [list(e.flattening(tolerance, segments=16))]
+        elif kind == "SPLINE":
             flat = [list(e.construction_tool().flattening(tolerance, segments=16))]
+        elif kind == "LWPOLYLINE" or (kind == "POLYLINE" and e.is_2d_polyline):
+            flat = [_polyline_with_bulges(e, tolerance)]
         else:
             flat = [list(sub.flattening(tolerance, segments=16)) for sub in p.sub_paths()]
         for points in flat:
@@ -145,6 +154,41 @@ def read_dxf(path, layer=None, scale=1.0, tolerance=0.01, origin=(0.0, 0.0)):
         raise ValueError(f"{owner}: '{path}' holds no closed contour{where} (found {found}; read are "
                          f"{', '.join(sorted(_DXF_TYPES))})")
     return [loop * scale + origin for loop in loops], names
+
+
+def _polyline_with_bulges(e, tolerance):
+    """The vertices of a 2D (LW)POLYLINE in WCS, each bulge (an arc of
+    included angle 4 atan(bulge), counter-clockwise when positive) flattened
+    with points on the arc, no chord farther than tolerance from it."""
+    if e.dxftype() == "LWPOLYLINE":
+        raw = [(x, y, b) for x, y, b in e.get_points("xyb")]
+        closed, elevation = e.closed, e.dxf.get("elevation", 0.0)
+    else:
+        raw = [(v.dxf.location.x, v.dxf.location.y, v.dxf.get("bulge", 0.0)) for v in e.vertices]
+        closed, elevation = e.is_closed, e.dxf.get("elevation", (0, 0, 0))[2]
+    out = []
+    count = len(raw) if closed else len(raw) - 1
+    for k in range(count):
+        x0, y0, bulge = raw[k]
+        x1, y1, _ = raw[(k + 1) % len(raw)]
+        out.append((x0, y0))
+        chord = math.hypot(x1 - x0, y1 - y0)
+        if bulge == 0 or chord == 0:
+            continue
+        theta = 4 * math.atan(bulge)
+        r = chord / (2 * abs(math.sin(theta / 2)))
+        offset = 0.5 * chord / math.tan(theta / 2)  # from the chord's midpoint, to its left
+        cx = 0.5 * (x0 + x1) - offset * (y1 - y0) / chord
+        cy = 0.5 * (y0 + y1) + offset * (x1 - x0) / chord
+        step = 2 * math.acos(1 - tolerance / r) if tolerance < r else math.pi
+        n = max(1, math.ceil(abs(theta) / step))
+        a0 = math.atan2(y0 - cy, x0 - cx)
+        out += [(cx + r * math.cos(a0 + theta * i / n), cy + r * math.sin(a0 + theta * i / n))
+                for i in range(1, n)]
+    if not closed:
+        out.append(raw[-1][:2])
+    from ezdxf.math import Vec3
+    return list(e.ocs().points_to_wcs(Vec3(x, y, elevation) for x, y in out))
 
 
 # --- SVG ----------------------------------------------------------------------
