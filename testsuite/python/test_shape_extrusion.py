@@ -282,6 +282,25 @@ class Layouts(unittest.TestCase):
         np.testing.assert_allclose(radius, 3.0, atol=1e-9)
         mid = 0.5 * (circle_poly + np.roll(circle_poly, -1, 0))
         self.assertLessEqual((3.0 - np.hypot(mid[:, 0] - 10, mid[:, 1] - 15)).max(), tol * (1 + 1e-9))
+        # a drawing in mm (viewBox units), with transforms
+        with open(self.path("mm.svg"), "w") as f:
+            f.write('<svg xmlns="http://www.w3.org/2000/svg" width="60mm" height="20mm" viewBox="0 0 60 20">\n'
+                    '<g transform="translate(10,0)"><rect x="0" y="0" width="5" height="5"/></g>\n'
+                    '<rect x="20" y="0" width="5" height="5" transform="scale(2)"/>\n</svg>\n')
+        mm = shapes.Extrusion.from_svg(self.path("mm.svg"), z=[0, 1])
+        np.testing.assert_allclose(sorted(map(tuple, mm.polygons[0])), [(10, 15), (10, 20), (15, 15), (15, 20)],
+                                   atol=1e-9)
+        np.testing.assert_allclose(sorted(map(tuple, mm.polygons[1])), [(40, 10), (40, 20), (50, 10), (50, 20)],
+                                   atol=1e-9)
+        # a viewBox drawn smaller than its units (0.1 px each): the tolerance still in units
+        with open(self.path("small.svg"), "w") as f:
+            f.write('<svg xmlns="http://www.w3.org/2000/svg" width="10" height="10" viewBox="0 0 100 100">'
+                    '<circle cx="50" cy="50" r="30"/></svg>')
+        small = shapes.Extrusion.from_svg(self.path("small.svg"), z=[0, 1], tolerance=0.01)
+        poly = small.polygons[0]
+        mid = 0.5 * (poly + np.roll(poly, -1, 0))
+        sagitta = 30 - np.hypot(mid[:, 0] - 50, mid[:, 1] - 50)
+        self.assertTrue(0.3 * 0.01 < sagitta.max() <= 0.01 * (1 + 1e-9), sagitta.max())
         with open(self.path("bad.svg"), "w") as f:
             f.write("<svg><rect")
         with self.assertRaisesRegex(ValueError, r"bad\.svg' is not a readable SVG file"):

@@ -228,7 +228,17 @@ def read_svg(path, scale=1.0, tolerance=0.01, origin=(0.0, 0.0)):
         raise OSError(f"{owner}: cannot read '{path}': {e}") from None
     except (ET.ParseError, ValueError) as e:
         raise ValueError(f"{owner}: '{path}' is not a readable SVG file: {e}") from None
-    height = float(svg.height) if svg.height is not None else 0.0
+    # svgelements maps the viewBox onto the viewport (px at 96 per inch): undo
+    # that, so that coordinates are the drawing's user units; y is flipped
+    # about the viewBox (or the viewport) so that its bottom edge is y = 0
+    vb = svg.viewbox
+    to_user = ~se.Matrix(svg.viewbox_transform) if vb is not None and svg.viewbox_transform else None
+    height = (vb.y + vb.height) if vb is not None else (float(svg.height) if svg.height is not None else 0.0)
+    if to_user is not None:  # the tolerance in px, where the curves are flattened
+        to_px = se.Matrix(svg.viewbox_transform)
+        tolerance_px = tolerance * min(math.hypot(to_px.a, to_px.b), math.hypot(to_px.c, to_px.d))
+    else:
+        tolerance_px = tolerance
     loops, names, pieces = [], [], []
     for k, el in enumerate(svg.elements()):
         if not isinstance(el, se.Shape):
@@ -246,11 +256,13 @@ def read_svg(path, scale=1.0, tolerance=0.01, origin=(0.0, 0.0)):
                     continue
                 if not pts:
                     pts = [np.array([seg.start.x, seg.start.y])]
-                pts += _flatten_svg_segment(seg, tolerance)
+                pts += _flatten_svg_segment(seg, tolerance_px)
                 closed = closed or isinstance(seg, se.Close)
             if len(pts) < 2:
                 continue
             pts = np.array(pts)
+            if to_user is not None:
+                pts = np.array([tuple(to_user.point_in_matrix_space(tuple(q))) for q in pts], dtype=float)
             pts[:, 1] = height - pts[:, 1]  # SVG's y points down
             if closed or isinstance(el, (se.Rect, se.Circle, se.Ellipse, se.Polygon)) or (
                     len(pts) > 2 and np.linalg.norm(pts[0] - pts[-1]) <= tolerance):

@@ -247,9 +247,10 @@ class Extrusion(Shape):
 
     @classmethod
     def from_svg(cls, path, z, scale=1.0, tolerance=0.01, origin=(0.0, 0.0), direction=1):
-        """The closed subpaths and shapes of an SVG file (svgelements), in user
-        units after transforms, y flipped so that the drawing appears upright
-        (y = height - y_svg); curves flattened to ``tolerance`` (user units).
+        """The closed subpaths and shapes of an SVG file (svgelements), in the
+        drawing's user units (those of its viewBox) after transforms, y
+        flipped so that the drawing appears upright (y = bottom of the viewBox
+        - y_svg); curves flattened to ``tolerance`` (user units).
         Coordinates: units * scale + origin."""
         from . import layouts
         polygons, names = layouts.read_svg(path, scale=scale, tolerance=tolerance, origin=origin)
