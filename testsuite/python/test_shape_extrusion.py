@@ -341,6 +341,12 @@ class Layouts(unittest.TestCase):
             shapes.Extrusion.from_mask(self.path("mask.png"), pixel_size=0, z=[0, 1])
         with self.assertRaisesRegex(ValueError, "solid' must be 'black' or 'white'"):
             shapes.Extrusion.from_mask(self.path("mask.png"), pixel_size=1, z=[0, 1], solid="grey")
+        # transparent black counts as white: one opaque black pixel
+        rgba = Image.new("RGBA", (4, 3), (0, 0, 0, 0))
+        rgba.putpixel((1, 0), (0, 0, 0, 255))
+        rgba.save(self.path("alpha.png"))
+        one = shapes.Extrusion.from_mask(self.path("alpha.png"), pixel_size=1, z=[0, 1])
+        np.testing.assert_array_equal(sorted(map(tuple, one.polygons[0])), [(1, 2), (1, 3), (2, 2), (2, 3)])
         Image.new("L", (4, 4), 255).save(self.path("white.png"))
         with self.assertRaisesRegex(ValueError, r"white\.png' holds no closed contour"):
             shapes.Extrusion.from_mask(self.path("white.png"), pixel_size=1, z=[0, 1])

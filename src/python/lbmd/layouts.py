@@ -292,6 +292,10 @@ def read_mask(path, pixel_size, threshold=0.5, solid="black", origin=(0.0, 0.0))
     from PIL import Image, UnidentifiedImageError
     try:
         with Image.open(path) as img:
+            if img.mode in ("RGBA", "LA", "PA") or "transparency" in img.info:
+                # transparent pixels count as white (the page), not as their colour
+                rgba = img.convert("RGBA")
+                img = Image.alpha_composite(Image.new("RGBA", rgba.size, (255, 255, 255, 255)), rgba)
             grey = np.asarray(img.convert("L"), dtype=float) / 255.0
     except UnidentifiedImageError:
         raise ValueError(f"{owner}: '{path}' is not a readable image") from None

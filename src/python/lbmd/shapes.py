@@ -263,7 +263,8 @@ class Extrusion(Shape):
         * 255 are black) as polygons along the exact pixel edges; ``solid``:
         which colour is the shape ("black" or "white"). The image's bottom-left
         corner is at ``origin``, a pixel is ``pixel_size`` wide; diagonal
-        neighbours are separate regions (4-connected)."""
+        neighbours are separate regions (4-connected); transparent pixels
+        count as white."""
         from . import layouts
         polygons, names = layouts.read_mask(path, pixel_size=pixel_size, threshold=threshold,
                                             solid=solid, origin=origin)
