@@ -4,6 +4,7 @@
 #include "bindings.hpp"
 
 #include "shapes/cylinder.hpp"
+#include "shapes/extrusion.hpp"
 #include "shapes/rhomboid.hpp"
 #include "shapes/simple_pore.hpp"
 #include "shapes/sphere.hpp"
@@ -38,6 +39,32 @@ void bind_shapes(py::module_& m) {
   py::class_<SimplePore, Shape, std::shared_ptr<SimplePore>>(m, "SimplePore")
       .def(py::init<const Vec3&, const Vec3&, double, double, double>(), py::arg("center"),
            py::arg("axis"), py::arg("length"), py::arg("radius"), py::arg("smoothing_radius"));
+
+  py::class_<Extrusion, Shape, std::shared_ptr<Extrusion>>(m, "Extrusion")
+      .def(py::init<const std::vector<Extrusion::Polygon>&, double, double, int,
+                    const std::vector<std::string>&>(),
+           py::arg("polygons"), py::arg("z0"), py::arg("z1"), py::arg("direction") = 1,
+           py::arg("names") = std::vector<std::string>{})
+      .def("num_edges", &Extrusion::num_edges)
+      // distances and normals of an (n, 3) array of points in one call (tests, timings)
+      .def(
+          "calc_dists",
+          [](const Extrusion& shape,
+             const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>&
+                 pos) {
+            Eigen::VectorXd dist(pos.rows());
+            Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> normal(pos.rows(), 3);
+            {
+              py::gil_scoped_release release;
+              for (Eigen::Index i = 0; i < pos.rows(); ++i) {
+                Vec3 n;
+                shape.calc_dist(pos.row(i).transpose(), dist[i], n);
+                normal.row(i) = n.transpose();
+              }
+            }
+            return py::make_tuple(dist, normal);
+          },
+          py::arg("pos"));
 
   py::class_<Union, Shape, std::shared_ptr<Union>>(m, "Union")
       .def(py::init<>())

@@ -192,3 +192,121 @@ class Union(Shape):
 
     def __repr__(self):
         return f"Union(shapes={self._shapes!r})"
+
+
+class Extrusion(Shape):
+    """A 2D layout extruded along z: the solid is S x [z0, z1], where S is the
+    interior of the closed ``polygons`` (each an (N, 2) array of vertices in
+    the xy plane) by the even-odd rule: a polygon inside another is a hole,
+    one inside a hole an island. Polygons must not cross, overlap or touch
+    along an edge (they may share single vertices). ``direction=-1``: the
+    complement, e.g. channels drawn as polygons, closed by a floor at z0 and a
+    ceiling at z1, with the fluid inside. Distance and normal are exact.
+    Layout files: :meth:`from_dxf`, :meth:`from_svg`, :meth:`from_mask`."""
+
+    _params = [Param("polygons", "object"), Param("z", "object"),
+               Param("direction", "int", 1, check=direction_check)]
+
+    def __init__(self, *args, **kwargs):
+        if args:
+            raise TypeError("Extrusion: parameters are keywords, e.g. Extrusion(polygons=[...], z=[z0, z1])")
+        values = parse("Extrusion", self._params, kwargs)
+        object.__setattr__(self, "_values", _extrusion_values("Extrusion", values))
+        object.__setattr__(self, "_names", [])
+        self._validate()
+
+    def _validate(self):
+        object.__setattr__(self, "_core", _lbmd.Extrusion(
+            list(self.polygons), self.z[0], self.z[1], self.direction, list(self._names)))
+
+    @classmethod
+    def _from_layout(cls, source, polygons, names, z, direction):
+        """A shape from a file's polygons; errors name the file (`source`) and
+        the polygon's entity (`names`)."""
+        self = cls.__new__(cls)
+        values = parse("Extrusion", cls._params, {"polygons": polygons, "z": z, "direction": direction})
+        object.__setattr__(self, "_values", _extrusion_values("Extrusion", values))
+        object.__setattr__(self, "_names", list(names))
+        try:
+            self._validate()
+        except ValueError as e:
+            raise ValueError(f"{source}: {e}") from None
+        return self
+
+    @classmethod
+    def from_dxf(cls, path, z, layer=None, scale=1.0, tolerance=0.01, origin=(0.0, 0.0), direction=1):
+        """The closed contours of a DXF file (ezdxf): closed LWPOLYLINE/POLYLINE
+        (bulges), CIRCLE, ELLIPSE, closed SPLINE, and loops chained from LINE,
+        ARC and open polylines whose ends meet; curves flattened so that no
+        point is farther than ``tolerance`` (in file units) from the curve.
+        ``layer``: only that layer. Coordinates: file units * scale + origin."""
+        from . import layouts
+        polygons, names = layouts.read_dxf(path, layer=layer, scale=scale, tolerance=tolerance,
+                                           origin=origin)
+        return cls._from_layout(path, polygons, names, z, direction)
+
+    @classmethod
+    def from_svg(cls, path, z, scale=1.0, tolerance=0.01, origin=(0.0, 0.0), direction=1):
+        """The closed subpaths and shapes of an SVG file (svgelements), in the
+        drawing's user units (those of its viewBox) after transforms, y
+        flipped so that the drawing appears upright (y = bottom of the viewBox
+        - y_svg); curves flattened to ``tolerance`` (user units).
+        Coordinates: units * scale + origin."""
+        from . import layouts
+        polygons, names = layouts.read_svg(path, scale=scale, tolerance=tolerance, origin=origin)
+        return cls._from_layout(path, polygons, names, z, direction)
+
+    @classmethod
+    def from_mask(cls, path, pixel_size, z, threshold=0.5, solid="black", origin=(0.0, 0.0),
+                  direction=1):
+        """The pixel regions of an image (PIL; grey levels below ``threshold``
+        * 255 are black) as polygons along the exact pixel edges; ``solid``:
+        which colour is the shape ("black" or "white"). The image's bottom-left
+        corner is at ``origin``, a pixel is ``pixel_size`` wide; diagonal
+        neighbours are separate regions (4-connected); transparent pixels
+        count as white."""
+        from . import layouts
+        polygons, names = layouts.read_mask(path, pixel_size=pixel_size, threshold=threshold,
+                                            solid=solid, origin=origin)
+        return cls._from_layout(path, polygons, names, z, direction)
+
+    def get_params(self):
+        return {"polygons": [p.copy() for p in self.polygons], "z": self.z.copy(),
+                "direction": self.direction}
+
+    def __repr__(self):
+        n = sum(len(p) for p in self.polygons)
+        return (f"Extrusion(polygons=<{len(self.polygons)} polygon(s), {n} vertices>, "
+                f"z={self.z.tolist()}, direction={self.direction})")
+
+
+def _extrusion_values(owner, values):
+    """polygons as a list of (N, 2) float arrays (copies) and z as [z0, z1]."""
+    polygons = values["polygons"]
+    if isinstance(polygons, np.ndarray) and polygons.ndim == 2:
+        polygons = [polygons]  # one polygon
+    if isinstance(polygons, (str, bytes)) or not isinstance(polygons, collections.abc.Iterable):
+        raise TypeError(f"{owner}: parameter 'polygons' must be a list of (N, 2) vertex arrays, "
+                        f"got {type(polygons).__name__}")
+    out = []
+    for k, p in enumerate(polygons):
+        try:
+            arr = np.array(p, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{owner}: parameter 'polygons', polygon {k} must be an (N, 2) array "
+                            f"of numbers, got {p!r}") from None
+        if arr.ndim != 2 or arr.shape[1] != 2:
+            raise ValueError(f"{owner}: parameter 'polygons', polygon {k} must be an (N, 2) array "
+                             f"of vertices, got shape {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{owner}: parameter 'polygons', polygon {k} has vertices that are not finite")
+        out.append(arr)
+    if not out:
+        raise ValueError(f"{owner}: parameter 'polygons' must hold at least one polygon, got none")
+    try:
+        z = np.array(values["z"], dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{owner}: parameter 'z' must be [z0, z1], got {values['z']!r}") from None
+    if z.shape != (2,) or not np.all(np.isfinite(z)) or not z[0] < z[1]:
+        raise ValueError(f"{owner}: parameter 'z' must be [z0, z1] with finite z0 < z1, got {values['z']!r}")
+    return {"polygons": out, "z": z, "direction": values["direction"]}
