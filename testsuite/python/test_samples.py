@@ -68,6 +68,27 @@ class Samples(unittest.TestCase):
         self.assertTrue(np.all(rows[-1, [2, 5]] > rows[0, [2, 5]]), "the cells did not move downstream")
         self.assertEqual(vtk_point_count(os.path.join(self.tmp.name, "out", "cell1_2.vtk")), 374)
 
+    def test_device_from_mask(self):
+        """The CAD-layout device (samples/data/constriction.dxf): cells enter
+        at the inlet and leave at the outlet (a fast flow: 35 mm/s, so that
+        they cross the 90 um in the 2.5 ms), volumes held within 2 %, mass in
+        = mass out within 1 %, the tables and the trajectory plot written."""
+        out = run_sample("device_from_mask.py", "--speed", "35", "--duration", "2.5", "--output-every", "40", "--haematocrit", "0.06",
+                         "--output", "device", cwd=self.tmp.name)
+        folder = os.path.join(self.tmp.name, "device")
+        events = read_csv(os.path.join(folder, "events.csv"))
+        self.assertGreater(sum(e["event"] == "in" for e in events), 3)
+        self.assertGreater(sum(e["event"] == "out" for e in events), 0, out)
+        for e in events:  # cells leave 5 um before the outlet face, enter in the first 18 um
+            x = float(e["x_um"])
+            self.assertTrue(x < 18.0 if e["event"] == "in" else x > 60.0, e)
+        rows = read_csv(os.path.join(folder, "cells.csv"))
+        volumes = np.array([float(r["volume_um3"]) for r in rows])
+        np.testing.assert_allclose(volumes, np.median(volumes), rtol=0.02)
+        balance = float(out.split("mass flux balance ")[1].split(";")[0])
+        self.assertAlmostEqual(balance, 1.0, delta=0.01)
+        self.assertGreater(os.path.getsize(os.path.join(folder, "device_trajectories.png")), 10000)
+
     def test_bifurcation(self):
         out = run_sample("cell_flow_in_bifurcation.py", "--cells", "4", "--cycles", "2", "--steps", "100",
                          "--output", "out", cwd=self.tmp.name)
