@@ -281,7 +281,21 @@ IdArray add_particles(System& s, const IdArray& ids, const RealArray& pos, const
                       const RealArray& mass, const IdArray& type, const IdArray& mol_id,
                       const RealArray& ext_force, const IdArray& fixed) {
   s.synchronize();
-  const py::ssize_t n = pos.shape(0);
+  const py::ssize_t n = pos.ndim() == 2 ? pos.shape(0) : 0;
+  // every array one row per particle (a checkpoint's arrays come here unchecked)
+  const auto rows = [n](const auto& a, int ndim, const char* name) {
+    if (a.ndim() != ndim || a.shape(0) != n || (ndim == 2 && a.shape(1) != 3))
+      throw InputError(std::string("add_particles: '") + name + "' must have shape (" +
+                       std::to_string(n) + (ndim == 2 ? ", 3)" : ",)") + " like 'pos'");
+  };
+  rows(pos, 2, "pos");
+  rows(ids, 1, "ids");
+  rows(vel, 2, "v");
+  rows(mass, 1, "mass");
+  rows(type, 1, "type");
+  rows(mol_id, 1, "mol_id");
+  rows(ext_force, 2, "ext_force");
+  rows(fixed, 1, "fixed");
   auto id_r = ids.unchecked<1>();
   auto p_r = pos.unchecked<2>();
   auto v_r = vel.unchecked<2>();
