@@ -344,6 +344,12 @@ class Cube(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"non-manifold: edge between vertices 0 \(0, 0, 0\) "
                                     r"and 1 \(1, 0, 0\) belongs to 4 triangles"):
             shapes.SurfaceMesh(vertices=tv, triangles=tt)
+        # two cubes touching at the corner (1, 1, 1): no bad edge, a bad vertex
+        v2, t2 = cube(lo=(1, 1, 1))
+        with self.assertRaisesRegex(ValueError, r"non-manifold at vertex 7 \(1, 1, 1\): its "
+                                    "triangles form separate fans"):
+            shapes.SurfaceMesh(vertices=np.vstack([v, v2[1:]]),
+                               triangles=np.vstack([t, np.where(t2 == 0, 7, t2 + 7)]))
         degenerate = np.vstack([v, [0.5, 0, 0]])
         with self.assertRaisesRegex(ValueError, "triangle 0 is degenerate"):
             shapes.SurfaceMesh(vertices=degenerate, triangles=np.vstack([[[0, 8, 1]], t]))

@@ -120,6 +120,39 @@ SurfaceMesh::SurfaceMesh(const std::vector<Vec3>& vertices, const std::vector<Tr
     neighbour[f.triangle][f.local] = e.triangle;
     i = j;
   }
+  // Around each vertex its triangles must form one fan (a disc): two closed
+  // surfaces that touch at a vertex share no edge but make it non-manifold.
+  // Union-find over triangle corners, joined across the shared edges.
+  std::vector<int> parent(3 * static_cast<std::size_t>(nt));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int x) {
+    while (parent[x] != x)
+      x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Triangle& other = m_triangles[neighbour[t][k]];
+      for (int end = 0; end < 2; ++end) {
+        const int corner = (k + end) % 3;
+        const int vertex = m_triangles[t][corner];
+        const int at = other[0] == vertex ? 0 : (other[1] == vertex ? 1 : 2);
+        parent[root(3 * t + corner)] = root(3 * neighbour[t][k] + at);
+      }
+    }
+  std::vector<int> fan(nv, -1);
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int vertex = m_triangles[t][k];
+      const int r = root(3 * t + k);
+      if (fan[vertex] == -1)
+        fan[vertex] = r;
+      else if (fan[vertex] != r)
+        throw InputError("SurfaceMesh: the surface is non-manifold at vertex " +
+                         describe_vertex(m_vertices, vertex) +
+                         ": its triangles form separate fans (surfaces that touch at a point); "
+                         "every vertex must have one ring of triangles");
+    }
 
   for (const Triangle& tri : m_triangles) {
     const Vec3 &a = m_vertices[tri[0]], &b = m_vertices[tri[1]], &c = m_vertices[tri[2]];

@@ -12,6 +12,7 @@
 // The constructor refuses (InputError) an empty mesh, indices out of range,
 // non-finite coordinates, degenerate (zero-area) triangles, open surfaces (an
 // edge of one triangle), non-manifold edges (three or more triangles) and
+// vertices (triangles in separate fans: bodies touching at a point), and
 // inconsistent orientation (two neighbours that run through their shared edge
 // the same way), naming the first bad triangle or edge with its vertex ids
 // and coordinates. A mesh whose triangles all face inward (negative enclosed
