@@ -173,19 +173,31 @@ class Sphere(unittest.TestCase):
         self.assertAlmostEqual(moved.calc_dist(CENTER + [2 * R, 0, 0])[0], R, delta=1e-9)
 
     def test_lattice_flags(self):
+        """Boundary nodes of the STL sphere and of an 80-triangle icosphere
+        (h = 0.066 R: nodes in its band) equal those of shapes.Sphere at every
+        node farther than h from the sphere, and the mesh's own is_inside in
+        the band."""
         s = lbmd.System(box_l=[12.0, 12.0, 12.0])
         s.time_step = 0.1
         lbf = s.actors.add(lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1))
-        s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=shapes.SurfaceMesh(file=self.ascii)))
-        mesh_flags = np.asarray(lbf[:, :, :].boundary)
-        s.lbboundaries.clear()
         s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=self.sphere))
         sphere_flags = np.asarray(lbf[:, :, :].boundary)
+        self.assertGreater(sphere_flags.sum(), 300)
         nodes = np.stack(np.meshgrid(*[np.arange(12) + 0.5] * 3, indexing="ij"), axis=-1)
         d_sphere = np.linalg.norm(nodes - CENTER, axis=-1) - R
-        away = np.abs(d_sphere) > self.h
-        self.assertGreater(sphere_flags.sum(), 300)
-        np.testing.assert_array_equal(mesh_flags[away], sphere_flags[away])
+        coarse = icosphere(1, R, CENTER)
+        for mesh, h in ((shapes.SurfaceMesh(file=self.ascii), self.h),
+                        (shapes.SurfaceMesh(vertices=coarse[0], triangles=coarse[1]),
+                         faceting(*coarse, CENTER, R)[0])):
+            s.lbboundaries.clear()
+            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=mesh))
+            mesh_flags = np.asarray(lbf[:, :, :].boundary)
+            away = np.abs(d_sphere) > h
+            np.testing.assert_array_equal(mesh_flags[away], sphere_flags[away])
+            band = np.argwhere(~away)
+            for i, j, k in band:
+                self.assertEqual(mesh_flags[i, j, k], mesh.is_inside(nodes[i, j, k]))
+        self.assertGreater(len(band), 100)
 
     def test_pickle_and_checkpoint(self):
         mesh = shapes.SurfaceMesh(file=self.binary, offset=[0.1, 0, 0])
@@ -316,6 +328,20 @@ class Cube(unittest.TestCase):
             self.assertAlmostEqual(d_mesh, d_box, delta=1e-12, msg=str(p))
             np.testing.assert_allclose(n_mesh, n_box, atol=1e-12, err_msg=str(p))
             self.assertEqual(mesh.is_inside(p), box.is_inside(p))
+
+    def test_obj_quads(self):
+        """An OBJ file of quads (read through meshio): each split in two."""
+        v, _ = cube()
+        quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "cube.obj")
+            with open(path, "w") as f:
+                f.writelines("v {} {} {}\n".format(*c) for c in v)
+                f.writelines("f {} {} {} {}\n".format(*(np.add(q, 1))) for q in quads)
+            mesh = shapes.SurfaceMesh(file=path, scale=2.0)
+        self.assertEqual(len(mesh.triangles), 12)
+        self.assertAlmostEqual(mesh.volume, 8.0, delta=1e-12)
+        self.assertEqual(mesh.calc_dist([1.0, 1.0, 2.5])[0], 0.5)
 
     def test_inverted_turned_outward(self):
         v, t = cube()
