@@ -288,6 +288,11 @@ class NonConvex(unittest.TestCase):
             self.assertAlmostEqual(d_mesh, -exact if inside else exact, delta=1e-12, msg=str(p))
             self.assertLess(abs(mesh.calc_dist(p - d_mesh * n_mesh)[0]), 1e-12)
         self.assertGreater(n_inside, 100)
+        # the same body given inside out: turned outward, the same distances
+        with self.assertWarnsRegex(UserWarning, "turned outward"):
+            inverted = shapes.SurfaceMesh(vertices=v, triangles=t[:, ::-1])
+        for p in points[:500]:
+            self.assertAlmostEqual(inverted.calc_dist(p)[0], mesh.calc_dist(p)[0], delta=1e-12)
 
     def test_sharp_tetrahedron(self):
         """Edges with small dihedral angles: the sign from the nearest face's
@@ -295,6 +300,8 @@ class NonConvex(unittest.TestCase):
         v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 3.0]])
         t = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
         mesh = shapes.SurfaceMesh(vertices=v, triangles=t)
+        with self.assertWarnsRegex(UserWarning, "turned outward"):
+            inverted = shapes.SurfaceMesh(vertices=v, triangles=t[:, ::-1])
         a, b, c = (v[t[:, k]] for k in range(3))
         n = np.cross(b - a, c - a)
         n /= np.linalg.norm(n, axis=1)[:, None]
@@ -306,6 +313,7 @@ class NonConvex(unittest.TestCase):
             inside = bool(np.all(planes < 0))
             n_inside += inside
             self.assertEqual(d_mesh < 0, inside, msg=str(p))
+            self.assertEqual(inverted.calc_dist(p)[0] < 0, inside, msg=str(p))
             if inside:  # convex: the nearest face plane
                 self.assertAlmostEqual(d_mesh, planes.max(), delta=1e-12)
             else:
