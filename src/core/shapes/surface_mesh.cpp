@@ -328,6 +328,11 @@ void SurfaceMesh::calc_dist(const Vec3& pos, double& dist, Vec3& normal) const {
     if (node.left < 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const auto& corners = m_corners[i];
+        // the distance from the triangle's plane is a lower bound of that
+        // from the triangle, and costs one dot product
+        const double plane = (pos - corners[0]).dot(m_face_normals[m_order[i]]);
+        if (plane * plane >= best2)
+          continue;
         Feature feature;
         const Vec3 q = closest_on_triangle(pos, corners[0], corners[1], corners[2], feature);
         const double d2 = (q - pos).squaredNorm();
