@@ -8,6 +8,7 @@
 #include "shapes/rhomboid.hpp"
 #include "shapes/simple_pore.hpp"
 #include "shapes/sphere.hpp"
+#include "shapes/surface_mesh.hpp"
 #include "shapes/union.hpp"
 #include "shapes/wall.hpp"
 
@@ -72,6 +73,29 @@ void bind_shapes(py::module_& m) {
       .def("remove", &Union::remove, py::arg("shape"))
       .def("clear", &Union::clear)
       .def("size", &Union::size);
+
+  using VertexArray = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  using TriangleArray = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  py::class_<SurfaceMesh, Shape, std::shared_ptr<SurfaceMesh>>(m, "SurfaceMesh")
+      .def(py::init([](const VertexArray& vertices, const TriangleArray& triangles, int direction) {
+             std::vector<Vec3> v(vertices.rows());
+             for (Eigen::Index i = 0; i < vertices.rows(); ++i)
+               v[i] = vertices.row(i).transpose();
+             std::vector<SurfaceMesh::Triangle> t(triangles.rows());
+             for (Eigen::Index i = 0; i < triangles.rows(); ++i)
+               t[i] = {triangles(i, 0), triangles(i, 1), triangles(i, 2)};
+             return std::make_shared<SurfaceMesh>(v, t, direction);
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::arg("direction") = 1)
+      .def_property_readonly("inverted", &SurfaceMesh::inverted)
+      .def_property_readonly("volume", &SurfaceMesh::volume)
+      .def_property_readonly("triangles", [](const SurfaceMesh& s) {
+        TriangleArray t(static_cast<Eigen::Index>(s.triangles().size()), 3);
+        for (std::size_t i = 0; i < s.triangles().size(); ++i)
+          for (int k = 0; k < 3; ++k)
+            t(static_cast<Eigen::Index>(i), k) = s.triangles()[i][k];
+        return t;
+      });
 }
 
 } // namespace pyoif::python
