@@ -193,13 +193,30 @@ class Errors(unittest.TestCase):
     def test_other_version(self):
         with h5py.File(self.path, "r+") as f:
             f.attrs["version"] = checkpoint.FORMAT_VERSION + 1
+        self.assert_refused(self.path, "checksum")  # edited: the checksum no longer matches
+        checkpoint.seal(self.path)  # as another version would have written it
         self.assert_refused(self.path, "format version", str(checkpoint.FORMAT_VERSION + 1))
 
     def test_damaged_objects(self):
         with h5py.File(self.path, "r+") as f:
             del f["objects"]
             f.create_dataset("objects", data=np.frombuffer(b"\x80\x05garbage", dtype=np.uint8))
+        checkpoint.seal(self.path)
         self.assert_refused(self.path, "cannot be read back")
+
+    def test_one_byte_changed(self):
+        data = bytearray(file_bytes(self.path))
+        data[len(data) // 2] ^= 0x10
+        damaged = os.path.join(self.folder, "flipped.h5")
+        with open(damaged, "wb") as f:
+            f.write(bytes(data))
+        self.assert_refused(damaged, "checksum")
+
+    def test_missing_dataset(self):
+        with h5py.File(self.path, "r+") as f:
+            del f["system0/particles/folded_pos"]
+        checkpoint.seal(self.path)
+        self.assert_refused(self.path, "system0/particles/folded_pos", "missing")
 
     def test_unpicklable_object_keeps_previous(self):
         before = file_bytes(self.path)

@@ -17,7 +17,10 @@ returns them as attributes (``ns.system``, ``ns.cells``, ...), ready to run:
 would have given at the same number of MPI ranks, and the same state to
 round-off at another rank count.
 
-The file (format "pyoif-checkpoint", version FORMAT_VERSION):
+The file (format "pyoif-checkpoint", version FORMAT_VERSION): HDF5 after a
+user block of 512 bytes that holds the SHA-256 of the rest (checked before
+anything is read: a damaged or truncated copy is refused; after editing a
+checkpoint with h5py, ``lbmd.checkpoint.seal(path)`` writes it again);
 
 - ``/`` attributes ``format``, ``version``, ``ranks`` (of the saving run),
   ``step``, ``time``, ``created``;
@@ -124,6 +127,13 @@ def restore_system(system, state):
     saved = state.pop("_checkpoint")
     arrays = _context["arrays"]
     prefix = saved["prefix"]
+    fields = ("id", "folded_pos", "image", "v", "f", "ext_force", "normal", "mass", "type", "mol_id", "fixed",
+              "rebuild_reference", "exclusions")
+    _require_arrays(arrays, [f"{prefix}/particles/{k}" for k in fields]
+                    + [f"{prefix}/bonds/{i}/{k}" for i in range(len(state["bonded_inter"]))
+                       for k in ("ids", "per_bond")]
+                    + ([f"{prefix}/fluid/stored_population", f"{prefix}/fluid/coupling_field"]
+                       if saved["fluid"] is not None else []))
     d = system.__dict__
     d.update(state)
     core = _lbmd.System(np.asarray(saved["box_l"], dtype=float), list(saved["periodicity"]))
@@ -221,12 +231,13 @@ def save(path, system, **objects):
 
     def write_to(tmp):
         import h5py
-        with h5py.File(tmp, "w") as f:
+        with h5py.File(tmp, "w", userblock_size=USERBLOCK) as f:
             f.attrs.update(attrs)
             f.create_dataset("objects", data=np.frombuffer(blob, dtype=np.uint8))
             for name, value in arrays.items():
                 f.create_dataset(name, data=value)
             f.flush()
+        seal(tmp)
         with open(tmp, "rb") as fh:  # on disk before the rename
             os.fsync(fh.fileno())
 
@@ -234,41 +245,102 @@ def save(path, system, **objects):
     return os.fspath(path)
 
 
+# The file starts with a user block of USERBLOCK bytes (HDF5 leaves it to the
+# application) holding MAGIC and the SHA-256 of everything after it: a file
+# damaged or cut anywhere is refused before the HDF5 library reads it (the
+# library itself can crash on some damaged files).
+USERBLOCK = 512
+MAGIC = b"PyOIF checkpoint\nsha256 "
+
+
+def seal(path):
+    """Write the user block's checksum of an HDF5 file made with
+    userblock_size=USERBLOCK (save does; a tool that edits a checkpoint with
+    h5py calls it afterwards)."""
+    import hashlib
+    digest = hashlib.sha256()
+    with open(path, "r+b") as f:
+        f.seek(USERBLOCK)
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+        header = MAGIC + digest.hexdigest().encode() + b"\n"
+        f.seek(0)
+        f.write(header.ljust(USERBLOCK, b"\0"))
+
+
+def _verify(path):
+    """CheckpointError unless the file's user block holds the checksum of the
+    rest of it."""
+    import hashlib
+    with open(path, "rb") as f:
+        head = f.read(USERBLOCK)
+        if not head.startswith(MAGIC):
+            if head.startswith(b"\x89HDF\r\n\x1a\n"):
+                raise CheckpointError(f"checkpoint '{path}': an HDF5 file, but not a PyOIF checkpoint (no PyOIF "
+                                      f"header before the HDF5 data)")
+            raise CheckpointError(f"checkpoint '{path}': not a PyOIF checkpoint (no PyOIF header; not a "
+                                  f"readable HDF5 file, or truncated)")
+        expected = head[len(MAGIC):len(MAGIC) + 64]
+        digest = hashlib.sha256()
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    if digest.hexdigest().encode() != expected:
+        raise CheckpointError(f"checkpoint '{path}': damaged or truncated: its checksum does not match its "
+                              f"content (a copy cut short, a disk error, or an edit without "
+                              f"lbmd.checkpoint.seal)")
+
+
 def _read(path):
     """(attrs, blob, arrays) of a checkpoint file, or CheckpointError."""
     import h5py
     if not os.path.isfile(path):
         raise CheckpointError(f"checkpoint '{path}': no such file")
+    _verify(path)
     try:
         f = h5py.File(path, "r")
     except OSError as e:
         raise CheckpointError(f"checkpoint '{path}': not a readable HDF5 file (truncated, or not a "
                               f"checkpoint): {e}") from None
+    # h5py raises OSError, KeyError, ValueError, TypeError or RuntimeError
+    # ("object visitation failed") on a damaged file, wherever it reads
+    damaged = (OSError, KeyError, ValueError, TypeError, RuntimeError)
     with f:
-        fmt = f.attrs.get("format")
+        try:
+            fmt = f.attrs.get("format")
+            version = f.attrs.get("version")
+        except damaged as e:
+            raise CheckpointError(f"checkpoint '{path}': damaged: its attributes cannot be read ({e})") from None
         if isinstance(fmt, bytes):
             fmt = fmt.decode(errors="replace")
         if fmt != FORMAT:
             raise CheckpointError(f"checkpoint '{path}': an HDF5 file, but not a PyOIF checkpoint "
                                   f"(attribute 'format' is {fmt!r}, expected {FORMAT!r})")
-        version = f.attrs.get("version")
         if version != FORMAT_VERSION:
             raise CheckpointError(f"checkpoint '{path}': format version {version}, this PyOIF reads "
                                   f"version {FORMAT_VERSION} (write it again with the version that made it)")
-        attrs = dict(f.attrs)
-        if "objects" not in f:
-            raise CheckpointError(f"checkpoint '{path}': the dataset 'objects' is missing")
         arrays = {}
         try:
-            blob = f["objects"][()].tobytes()
+            attrs = dict(f.attrs)
+            objects = f.get("objects")
+            if not isinstance(objects, h5py.Dataset) or objects.ndim != 1 or objects.dtype != np.uint8:
+                raise CheckpointError(f"checkpoint '{path}': the dataset 'objects' (bytes) is missing or not "
+                                      f"a byte array")
+            blob = objects[()].tobytes()
 
             def visit(name, item):
                 if isinstance(item, h5py.Dataset) and name != "objects":
                     arrays[name] = item[()]
             f.visititems(visit)
-        except (OSError, KeyError, ValueError) as e:
+        except damaged as e:
             raise CheckpointError(f"checkpoint '{path}': damaged ({e})") from None
     return attrs, blob, arrays
+
+
+def _require_arrays(arrays, names):
+    """CheckpointError naming the first of the datasets missing."""
+    for name in names:
+        if name not in arrays:
+            raise CheckpointError(f"the dataset '{name}' is missing (a damaged or edited file)")
 
 
 def load(path):
@@ -296,8 +368,11 @@ def load(path):
     try:
         try:
             objects = pickle.loads(blob)
-        except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, IndexError) as e:
-            raise CheckpointError(f"checkpoint '{path}': the objects cannot be read back ({e})") from None
+        except CheckpointError as e:
+            raise CheckpointError(f"checkpoint '{path}': {e}") from None
+        except Exception as e:  # damaged bytes can raise anything while unpickling
+            raise CheckpointError(f"checkpoint '{path}': the objects cannot be read back "
+                                  f"({type(e).__name__}: {e})") from None
     finally:
         _context = None
     if not isinstance(objects, dict) or "system" not in objects:

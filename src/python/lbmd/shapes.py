@@ -311,6 +311,7 @@ def _extrusion_values(owner, values):
         raise ValueError(f"{owner}: parameter 'z' must be [z0, z1] with finite z0 < z1, got {values['z']!r}")
     return {"polygons": out, "z": z, "direction": values["direction"]}
 
+
 class SurfaceMesh(Shape):
     """The volume enclosed by a closed triangulated surface: ``file=`` (STL,
     ASCII or binary; OBJ, PLY, VTK, ... through meshio) or ``vertices=`` (N x 3)
