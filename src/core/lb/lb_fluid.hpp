@@ -455,9 +455,9 @@ private:
   template <typename Real> void apply_bounce_back(Real* f) const;
   /** The open faces' populations after an update (lb_open_boundary.cpp). */
   void apply_open_boundaries();
-  /** Volume per time through the node plane next to open face `face`, into
-   *  the lattice (MD units); collective. */
-  double open_boundary_volume_flux(const OpenBoundarySpec& face) const;
+  /** Mass and volume per time through the node plane next to open face
+   *  `face`, into the lattice (MD units); collective. */
+  std::pair<double, double> open_boundary_fluxes(const OpenBoundarySpec& face) const;
   /** Calls body(padded node, global node, plane offset) for each fluid node
    *  of open face `face` that this rank owns. */
   template <class Body> void for_each_open_node(const OpenBoundarySpec& face, Body&& body) const;

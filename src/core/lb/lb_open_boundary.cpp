@@ -18,8 +18,10 @@
 
 #include <mpi.h>
 
+#include <array>
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace pyoif::lb {
 
@@ -100,7 +102,7 @@ void LBFluid::apply_open_boundaries() {
       // next plane is the flow rate asked; 1 % of the relative error per
       // update: smooth against the sound waves, converged in a few
       // thousand updates, in a steady flow exact.
-      const double measured = open_boundary_volume_flux(face);
+      const double measured = open_boundary_fluxes(face).second;
       if (measured > 0.0)
         face.gain *= 1.0 + 0.01 * (face.flow_rate / measured - 1.0);
     }
@@ -134,18 +136,28 @@ void LBFluid::apply_open_boundaries() {
   }
 }
 
-double LBFluid::open_boundary_volume_flux(const OpenBoundarySpec& face) const {
+std::pair<double, double> LBFluid::open_boundary_fluxes(const OpenBoundarySpec& face) const {
+  // the momentum density's normal component (with the Guo half force) on
+  // the plane next to the face: mass per time, and over the density, volume
+  // per time. Not on the face plane itself: its nodes also stream across the
+  // periodic edge, into the opposite face, which the boundary rewrites (that
+  // half-link flux is not the fluid's); the next plane's momentum is the
+  // mean of the two interior link fluxes beside it, equal in a steady flow.
   const std::ptrdiff_t step = (face.high ? -1 : 1) * padded_axis_stride(face.axis);
-  double flux = 0.0;
+  std::array<double, 2> flux{0.0, 0.0};
   for_each_open_node(face, [&](std::size_t n, const Vec3i&, std::size_t) {
     double rho;
     Vec3 j;
     moments(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(n) + step), rho, j);
-    flux += (j[face.axis] + 0.5 * m_ext_lattice[face.axis]) / rho;
+    const double normal = j[face.axis] + 0.5 * m_ext_lattice[face.axis];
+    flux[0] += normal;
+    flux[1] += normal / rho;
   });
   if (m_grid.size() > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &flux, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());
-  return (face.high ? -1.0 : 1.0) * flux * m_p.agrid * m_p.agrid * m_p.agrid / m_p.tau;
+    MPI_Allreduce(MPI_IN_PLACE, flux.data(), 2, MPI_DOUBLE, MPI_SUM, m_grid.comm());
+  // lattice momentum density (mass / agrid^3 * agrid / tau) times agrid^2
+  const double scale = (face.high ? -1.0 : 1.0) * m_p.agrid * m_p.agrid * m_p.agrid / m_p.tau;
+  return {flux[0] * scale, flux[1] * scale};
 }
 
 std::vector<double> LBFluid::open_boundary_gains() const {
@@ -163,26 +175,7 @@ void LBFluid::set_open_boundary_gains(const std::vector<double>& gains) {
 
 double LBFluid::open_boundary_mass_flux(std::size_t i) const {
   require(i < m_open.size(), "open boundary " + std::to_string(i) + " does not exist");
-  const OpenBoundarySpec& face = m_open[i];
-  // the momentum density's normal component (with the Guo half force) on
-  // the plane next to the face, times the node area: mass per time. Not on
-  // the face plane itself: its nodes also stream across the periodic edge,
-  // into the opposite face, which the boundary rewrites (that half-link flux
-  // is not the fluid's); the next plane's momentum is the mean of the two
-  // interior link fluxes beside it, equal in a steady flow.
-  const std::ptrdiff_t step = (face.high ? -1 : 1) * padded_axis_stride(face.axis);
-  double flux = 0.0;
-  for_each_open_node(face, [&](std::size_t n, const Vec3i&, std::size_t) {
-    double rho;
-    Vec3 j;
-    moments(static_cast<std::size_t>(static_cast<std::ptrdiff_t>(n) + step), rho, j);
-    flux += j[face.axis] + 0.5 * m_ext_lattice[face.axis];
-  });
-  if (m_grid.size() > 1)
-    MPI_Allreduce(MPI_IN_PLACE, &flux, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());
-  const double sign = face.high ? -1.0 : 1.0;
-  // lattice momentum density (mass / agrid^3 * agrid / tau) times agrid^2
-  return sign * flux * m_p.agrid * m_p.agrid * m_p.agrid / m_p.tau;
+  return open_boundary_fluxes(m_open[i]).first;
 }
 
 } // namespace pyoif::lb
