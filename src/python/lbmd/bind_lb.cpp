@@ -82,11 +82,33 @@ void bind_lb(py::module_& m) {
            py::arg("ext_force_density"), py::arg("kT"), py::arg("seed"), py::arg("collision"),
            py::arg("n_threads"), py::arg("box_l"), py::arg("node_grid") = Vec3i::Zero(),
            py::arg("balance") = true, py::arg("single_precision") = false)
-      .def_property_readonly("node_grid", [](const LBFluid& f) { return f.domain().dims(); })
+      // the decomposition as the load balance of the boundaries' flagging
+      // leaves it: flagged first if boundaries are pending (collective then)
+      .def_property_readonly("node_grid",
+                             [](LBFluid& f) {
+                               f.update_boundaries();
+                               return f.domain().dims();
+                             })
       .def_property_readonly("decomposition",
-                             [](const LBFluid& f) { return f.domain().describe(); })
-      .def_property_readonly("local_origin", &LBFluid::local_origin)
-      .def_property_readonly("local_shape", &LBFluid::local_grid)
+                             [](LBFluid& f) {
+                               f.update_boundaries();
+                               return f.domain().describe();
+                             })
+      .def_property_readonly("local_origin",
+                             [](LBFluid& f) {
+                               f.update_boundaries();
+                               return f.local_origin();
+                             })
+      .def_property_readonly("local_shape",
+                             [](LBFluid& f) {
+                               f.update_boundaries();
+                               return f.local_grid();
+                             })
+      .def_property_readonly("n_flaggings", &LBFluid::n_flaggings,
+                             "flagging passes so far (boundaries are flagged lazily, once)")
+      .def_property_readonly("boundaries_pending", &LBFluid::boundaries_pending)
+      .def("update_boundaries", &LBFluid::update_boundaries,
+           "collective: flags the boundaries set since the last flagging (else nothing)")
       .def_property_readonly("halo_bytes", &LBFluid::halo_bytes)
       .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
       .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
