@@ -54,6 +54,16 @@ void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const V
   fluid.set_block(prop, lo, hi, std::vector<double>(values.data(), values.data() + values.size()));
 }
 
+/** Flags the boundaries set since the last flagging, if any: collective
+ *  (every rank has the same ones pending), a rank left waiting says so. */
+void flag_pending(LBFluid& fluid) {
+  if (!fluid.boundaries_pending())
+    return;
+  collective_entry(
+      "the flagging of the boundaries (the fluid's first use after lbboundaries changed)");
+  fluid.update_boundaries();
+}
+
 } // namespace
 
 void bind_lb(py::module_& m) {
@@ -86,30 +96,34 @@ void bind_lb(py::module_& m) {
       // leaves it: flagged first if boundaries are pending (collective then)
       .def_property_readonly("node_grid",
                              [](LBFluid& f) {
-                               f.update_boundaries();
+                               flag_pending(f);
                                return f.domain().dims();
                              })
       .def_property_readonly("decomposition",
                              [](LBFluid& f) {
-                               f.update_boundaries();
+                               flag_pending(f);
                                return f.domain().describe();
                              })
       .def_property_readonly("local_origin",
                              [](LBFluid& f) {
-                               f.update_boundaries();
+                               flag_pending(f);
                                return f.local_origin();
                              })
       .def_property_readonly("local_shape",
                              [](LBFluid& f) {
-                               f.update_boundaries();
+                               flag_pending(f);
                                return f.local_grid();
                              })
       .def_property_readonly("n_flaggings", &LBFluid::n_flaggings,
                              "flagging passes so far (boundaries are flagged lazily, once)")
       .def_property_readonly("boundaries_pending", &LBFluid::boundaries_pending)
-      .def("update_boundaries", &LBFluid::update_boundaries,
+      .def("update_boundaries", &flag_pending,
            "collective: flags the boundaries set since the last flagging (else nothing)")
-      .def_property_readonly("halo_bytes", &LBFluid::halo_bytes)
+      .def_property_readonly("halo_bytes",
+                             [](LBFluid& f) {
+                               flag_pending(f);
+                               return f.halo_bytes();
+                             })
       .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
       .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
       .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
@@ -117,8 +131,16 @@ void bind_lb(py::module_& m) {
       .def_property_readonly("single_precision", &LBFluid::single_precision)
       .def_property_readonly("tau", &LBFluid::tau)
       .def_property_readonly("n_updates", &LBFluid::n_updates)
-      .def_property_readonly("n_fluid_nodes", &LBFluid::n_fluid_nodes)
-      .def_property_readonly("n_links", &LBFluid::n_links)
+      .def_property_readonly("n_fluid_nodes",
+                             [](LBFluid& f) {
+                               flag_pending(f);
+                               return f.n_fluid_nodes();
+                             })
+      .def_property_readonly("n_links",
+                             [](LBFluid& f) {
+                               flag_pending(f);
+                               return f.n_links();
+                             })
       .def_property("n_threads", &LBFluid::n_threads, &LBFluid::set_n_threads)
       .def_property_readonly("relaxation",
                              [](const LBFluid& f) {
@@ -141,8 +163,16 @@ void bind_lb(py::module_& m) {
             }
           },
           py::arg("n") = 1)
-      .def("total_mass", &LBFluid::total_mass)
-      .def("total_momentum", &LBFluid::total_momentum)
+      .def("total_mass",
+           [](LBFluid& f) {
+             flag_pending(f);
+             return f.total_mass();
+           })
+      .def("total_momentum",
+           [](LBFluid& f) {
+             flag_pending(f);
+             return f.total_momentum();
+           })
       .def("set_boundaries",
            [](LBFluid& f, const std::vector<std::pair<std::shared_ptr<shapes::Shape>, Vec3>>& b) {
              std::vector<lb::BoundarySpec> specs;
@@ -150,11 +180,22 @@ void bind_lb(py::module_& m) {
                specs.push_back({shape, vel});
              f.set_boundaries(specs);
            })
-      .def("boundary_force", &LBFluid::boundary_force)
+      .def("boundary_force",
+           [](LBFluid& f, int b) {
+             flag_pending(f);
+             return f.boundary_force(b);
+           })
       .def("get_block", &get_block)
       .def("set_block", &set_block)
-      .def("write_vtk_velocity", &LBFluid::write_vtk_velocity)
-      .def("write_vtk_boundary", &LBFluid::write_vtk_boundary);
+      .def("write_vtk_velocity",
+           [](LBFluid& f, const std::string& path) {
+             flag_pending(f);
+             f.write_vtk_velocity(path);
+           })
+      .def("write_vtk_boundary", [](LBFluid& f, const std::string& path) {
+        flag_pending(f);
+        f.write_vtk_boundary(path);
+      });
 
   m.def(
       "copy_bandwidth",
