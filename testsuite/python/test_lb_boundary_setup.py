@@ -1,4 +1,4 @@
-"""Boundary set-up: the flags are computed lazily, once, by the first call
+"""Boundary set-up (also run on 2 ranks): the flags are computed lazily, once, by the first call
 that needs them, in one pass per boundary over its bounding box. They equal
 a reference from Python (shape.is_inside at every node centre, the first
 boundary in the list that contains the node wins), whether the boundaries
