@@ -143,16 +143,23 @@ class BadInput(unittest.TestCase):
             s.integrator.run(2**31)
 
     def test_whole_box_boundary_refused(self):
-        """A boundary that leaves no fluid node: refused, the fluid as before
-        (before: accepted, the fluid had zero mass but read density 1)."""
+        """A boundary that leaves no fluid node: refused, naming the
+        boundaries, at the first use of the fluid (the flagging is lazy);
+        removed, the fluid is as before (before: accepted, the fluid had zero
+        mass but read density 1)."""
         s = system()
         lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
         wall = lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=0.6))
         s.lbboundaries.add(wall)
         mass = lbf.total_mass()
+        everything = s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
+            shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=100.0)))
+        with self.assertRaisesRegex(ValueError, r"\(0: Wall, 1: Wall\) cover every lattice node, "
+                                                "no fluid is left"):
+            lbf.total_mass()
         with self.assertRaisesRegex(ValueError, "no fluid is left"):
-            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(
-                shape=lbmd.shapes.Wall(normal=[0, 0, 1], dist=100.0)))
+            s.integrator.run(1)
+        s.lbboundaries.remove(everything)
         self.assertEqual(len(s.lbboundaries), 1)
         self.assertEqual(lbf.total_mass(), mass)
         self.assertEqual(lbf[0, 0, 0].boundary, 1)

@@ -3,9 +3,11 @@
 #include "lb/lb_fluid.hpp"
 
 #include "io/vtk_legacy.hpp"
+#include "shapes/union.hpp"
 #include "utils/errors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -198,10 +200,10 @@ void LBFluid::allocate_subdomain() {
   m_field_valid.clear();
   m_field_used = false;
   m_ledger = CouplingLedger{};
-  for (int x = 1; x <= m_n[0]; ++x)
-    for (int y = 1; y <= m_n[1]; ++y)
-      for (int z = 1; z <= m_n[2]; ++z)
-        for (int q = 0; q < Q; ++q)
+  for (int q = 0; q < Q; ++q) // in memory order
+    for (int z = 1; z <= m_n[2]; ++z)
+      for (int y = 1; y <= m_n[1]; ++y)
+        for (int x = 1; x <= m_n[0]; ++x)
           set_full_population(q, q * m_stride + index(x, y, z), w[q] * m_p.density);
 }
 
@@ -212,18 +214,67 @@ std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& b
   std::vector<std::uint16_t> flag(static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2], 0);
   if (boundaries.empty())
     return flag;
-  for (int z = 0; z < m_pad[2]; ++z)
-    for (int y = 0; y < m_pad[1]; ++y)
-      for (int x = 0; x < m_pad[0]; ++x) {
-        Vec3i g = m_origin + Vec3i(x - 1, y - 1, z - 1);
-        for (int d = 0; d < 3; ++d)
-          g[d] = ((g[d] % m_global[d]) + m_global[d]) % m_global[d];
-        const Vec3 pos = (g.cast<double>() + Vec3::Constant(0.5)) * m_p.agrid;
-        std::uint16_t& f = flag[index(x, y, z)];
-        for (std::size_t b = 0; b < boundaries.size() && f == 0; ++b)
-          if (boundaries[b].shape->is_inside(pos))
-            f = static_cast<std::uint16_t>(b + 1);
+  // per axis and padded coordinate: the wrapped global node and its centre
+  std::array<std::vector<int>, 3> global;
+  std::array<std::vector<double>, 3> centre;
+  for (int d = 0; d < 3; ++d)
+    for (int x = 0; x < m_pad[d]; ++x) {
+      const int g = ((m_origin[d] + x - 1) % m_global[d] + m_global[d]) % m_global[d];
+      global[d].push_back(g);
+      centre[d].push_back((static_cast<double>(g) + 0.5) * m_p.agrid);
+    }
+  // A Union's members flag its nodes one by one (a node is in the union
+  // exactly when it is in a member), each over its own bounding box
+  std::vector<std::pair<const shapes::Shape*, std::uint16_t>> leaves;
+  auto add_leaves = [&leaves](const shapes::Shape& shape, std::uint16_t mark, auto& self) -> void {
+    if (const auto* u = dynamic_cast<const shapes::Union*>(&shape)) {
+      for (const auto& member : u->shapes())
+        self(*member, mark, self);
+      return;
+    }
+    leaves.emplace_back(&shape, mark);
+  };
+  for (std::size_t b = 0; b < boundaries.size(); ++b)
+    add_leaves(*boundaries[b].shape, static_cast<std::uint16_t>(b + 1), add_leaves);
+  // Shape by shape, in list order, over the padded coordinates whose node
+  // centres lie in its bounding box (one node wider each way against
+  // rounding; all of them for an unbounded shape), testing only the nodes
+  // no earlier boundary took: the first boundary containing a node wins, as
+  // a test of every boundary at every node would give
+  std::array<std::vector<int>, 3> visit;
+  for (const auto& [shape_ptr, mark] : leaves) {
+    const shapes::Shape& shape = *shape_ptr;
+    Vec3 lo, hi;
+    const bool bounded = shape.bounding_box(lo, hi);
+    bool empty = false;
+    for (int d = 0; d < 3; ++d) {
+      double first = 0.0, last = m_global[d] - 1.0;
+      if (bounded) {
+        const double l = std::floor(lo[d] / m_p.agrid - 0.5) - 1.0;
+        const double h = std::ceil(hi[d] / m_p.agrid - 0.5) + 1.0;
+        if (l > first) // (NaN: the whole axis)
+          first = l;
+        if (h < last)
+          last = h;
       }
+      visit[d].clear();
+      for (int x = 0; x < m_pad[d]; ++x)
+        if (global[d][x] >= first && global[d][x] <= last)
+          visit[d].push_back(x);
+      empty = empty || visit[d].empty();
+    }
+    if (empty)
+      continue;
+    for (const int z : visit[2])
+      for (const int y : visit[1]) {
+        const std::size_t row = index(0, y, z);
+        for (const int x : visit[0]) {
+          std::uint16_t& f = flag[row + static_cast<std::size_t>(x)];
+          if (f == 0 && shape.is_inside(Vec3(centre[0][x], centre[1][y], centre[2][z])))
+            f = mark;
+        }
+      }
+  }
   return flag;
 }
 
@@ -378,6 +429,17 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
     require(b.shape != nullptr, "LBBoundary: shape must be set");
     require(b.velocity.allFinite(), "LBBoundary: velocity must be finite");
   }
+  // flagged by the first call that needs the flags (update_boundaries)
+  m_pending_boundaries = boundaries;
+  m_boundaries_pending = true;
+  ++m_state_version;
+}
+
+void LBFluid::update_boundaries() {
+  if (!m_boundaries_pending)
+    return;
+  ++m_n_flaggings;
+  const std::vector<BoundarySpec>& boundaries = m_pending_boundaries;
   normalize_layout();
   std::vector<std::uint16_t> flag = flags_for(boundaries);
   long any_fluid = 0;
@@ -388,8 +450,17 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, &any_fluid, 1, MPI_LONG, MPI_MAX, m_grid.comm());
   // no fluid left: refused (nothing changed)
-  if (!any_fluid && !boundaries.empty())
-    throw InputError("LBBoundary: the boundaries cover every lattice node, no fluid is left");
+  if (!any_fluid && !boundaries.empty()) {
+    std::string names;
+    for (std::size_t b = 0; b < boundaries.size() && b < 20; ++b)
+      names += (b ? ", " : "") + std::to_string(b) + ": " + boundaries[b].shape->name();
+    if (boundaries.size() > 20)
+      names += ", ...";
+    throw InputError("LBBoundary: the " + std::to_string(boundaries.size()) +
+                     " boundaries of system.lbboundaries (" + names +
+                     ") cover every lattice node, no fluid is left; remove or change one "
+                     "before the fluid is used");
+  }
   // Load balance: while no particle has coupled yet (the coupling's records
   // hold this rank's node indices), the cuts move so that every rank holds
   // about as many fluid nodes (the solid ones cost nothing in the update).
@@ -420,11 +491,13 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
   }
   const std::vector<std::uint16_t> old_flag = std::move(m_flag);
   m_flag = std::move(flag);
-  m_boundaries = boundaries;
+  m_boundaries = std::move(m_pending_boundaries);
+  m_pending_boundaries.clear();
+  m_boundaries_pending = false;
   // nodes that became fluid start at rest at the reference density
-  for (int x = 1; x <= m_n[0]; ++x)
+  for (int z = 1; z <= m_n[2]; ++z) // (in memory order)
     for (int y = 1; y <= m_n[1]; ++y)
-      for (int z = 1; z <= m_n[2]; ++z) {
+      for (int x = 1; x <= m_n[0]; ++x) {
         const std::size_t n = index(x, y, z);
         if (old_flag[n] != 0 && m_flag[n] == 0)
           for (int q = 0; q < Q; ++q)
@@ -515,6 +588,7 @@ std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) 
 }
 
 Vec3 LBFluid::boundary_force(int b) const {
+  flags_current();
   require(b >= 0 && b < static_cast<int>(m_boundaries.size()),
           "boundary index " + std::to_string(b) + " out of range");
   // Momentum exchange of the last streaming (Ladd 1994): the population
@@ -535,6 +609,7 @@ Vec3 LBFluid::boundary_force(int b) const {
 }
 
 std::size_t LBFluid::checked_node(const Vec3i& node) const {
+  flags_current();
   for (int d = 0; d < 3; ++d)
     if (node[d] < 0 || node[d] >= m_global[d])
       throw InputError("lattice node index " + std::to_string(node[d]) + " on axis " +
@@ -574,6 +649,7 @@ void LBFluid::check_block(const Vec3i& lo, const Vec3i& hi) const {
 
 std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
                                        const Vec3i& hi) const {
+  flags_current();
   const int nc = block_components(prop);
   check_block(lo, hi);
   const Vec3i n = hi - lo;
@@ -622,6 +698,7 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
 
 void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                         const std::vector<double>& values) {
+  update_boundaries();
   const int nc = block_components(prop);
   if (prop != "velocity" && prop != "density" && prop != "population" &&
       prop != "stored_population" && prop != "coupling_field")
@@ -791,6 +868,7 @@ void LBFluid::compute_coupling_velocities() {
 }
 
 double LBFluid::total_mass() const {
+  flags_current();
   double mass = 0.0; // summed in double in either precision
   with_populations([&](const auto* populations) {
     for (const Run& r : m_runs)
@@ -810,6 +888,7 @@ double LBFluid::total_mass() const {
 }
 
 Vec3 LBFluid::total_momentum() const {
+  flags_current();
   Vec3 j = Vec3::Zero();
   with_populations([&](const auto* populations) {
     for (const Run& r : m_runs) {
@@ -861,6 +940,7 @@ template <class Write> void write_on_root(MPI_Comm comm, int size, int rank, Wri
 } // namespace
 
 void LBFluid::write_vtk_field(const std::string& path, const std::string& prop) const {
+  flags_current();
   // (x, y, z) blocks come z fastest; VTK wants x fastest
   const std::vector<double> block = get_block(prop, Vec3i::Zero(), m_global);
   const std::size_t nc = block.size() / static_cast<std::size_t>(m_global.prod());

@@ -199,7 +199,18 @@ public:
   double total_mass() const;
 
   // --- boundaries -------------------------------------------------------------
-  /** Replaces all boundaries; nodes that become fluid start at rest at `dens`. */
+  // Lazy: set_boundaries() checks its input and records the list; the nodes
+  // are flagged (and the fluid runs, bounce-back links, halo lists and the
+  // load balance derived) by update_boundaries(), which every entry point
+  // that needs them calls first: step(), the node and block access, the
+  // totals, boundary_force(), the output, the particle coupling,
+  // System::integrate. Adding N boundaries one by one thus flags once.
+  // Under MPI the first such call after set_boundaries() is collective (the
+  // block access, totals, output, runs and coupling already are; a rank
+  // alone asking for node_*() first would wait for the others).
+  /** Replaces all boundaries (flagged later, see above); nodes that become
+   *  fluid start at rest at `dens`. Throws InputError at once for a null
+   *  shape, a non-finite velocity or too many boundaries. */
   void set_boundaries(const std::vector<BoundarySpec>& boundaries);
   /** Replaces the open faces (collective; checked: both faces of an axis
    *  open or neither, the plane sizes). */
@@ -211,11 +222,28 @@ public:
   /** Mass flux (MD units: mass per time) into the lattice at open face i,
    *  through the node plane next to the face; collective. */
   double open_boundary_mass_flux(std::size_t i) const;
+  /** Collective: flags the nodes for the boundaries of the last
+   *  set_boundaries(), if not done yet (else nothing). One pass over the
+   *  nodes per boundary's bounding box; a node belongs to the first
+   *  boundary in the list that contains its centre. Throws InputError
+   *  naming the boundaries when they leave no fluid node (the boundaries
+   *  stay pending: every later call throws until they change). */
+  void update_boundaries();
+  /** Whether set_boundaries() was called since the last flagging. */
+  bool boundaries_pending() const { return m_boundaries_pending; }
+  /** Number of flagging passes so far (set-up cost; tests of laziness). */
+  std::uint64_t n_flaggings() const { return m_n_flaggings; }
   /** Force of the fluid on boundary b in the last update (momentum exchange). */
   Vec3 boundary_force(int b) const;
   /** Over all ranks. */
-  std::size_t n_fluid_nodes() const { return m_n_fluid_global; }
-  std::size_t n_links() const { return m_n_links_global; }
+  std::size_t n_fluid_nodes() const {
+    flags_current();
+    return m_n_fluid_global;
+  }
+  std::size_t n_links() const {
+    flags_current();
+    return m_n_links_global;
+  }
   /** Bytes this rank sends to other ranks in one population halo exchange. */
   std::size_t halo_bytes() const;
   /** Seconds this rank spent in the population halo exchanges with other
@@ -384,7 +412,10 @@ public:
     std::vector<Vec3> coupling_force;           ///< per particle, this pass
     std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
   };
-  CouplingLedger& coupling_ledger() { return m_ledger; }
+  CouplingLedger& coupling_ledger() {
+    update_boundaries(); // a flagging may move the cuts, which resets the ledger
+    return m_ledger;
+  }
   /** The coupling stencils' steps (CouplingLedger::StencilSteps). */
   CouplingLedger::StencilSteps stencil_steps() const {
     CouplingLedger::StencilSteps st;
@@ -432,7 +463,17 @@ private:
   void write_vtk_field(const std::string& path, const std::string& prop) const;
   /** Throws InputError unless lo <= node < hi is a non-empty block of the lattice. */
   void check_block(const Vec3i& lo, const Vec3i& hi) const;
-  /** Flags of this rank's padded nodes (ghosts too) for these boundaries. */
+  /** update_boundaries() from a const query: the flags and what derives
+   *  from them are a cache of the boundaries already set (an LBFluid is
+   *  never a const object, so the cast is sound). */
+  void flags_current() const {
+    if (m_boundaries_pending)
+      const_cast<LBFluid*>(this)->update_boundaries();
+  }
+  /** Flags of this rank's padded nodes (ghosts too) for these boundaries:
+   *  0 fluid, b + 1 for the first boundary b whose shape contains the
+   *  node's centre (wrapped into the box). Each boundary visits only the
+   *  nodes of its bounding box that no earlier boundary took. */
   std::vector<std::uint16_t> flags_for(const std::vector<BoundarySpec>& boundaries) const;
   /** Allocates the populations (rest state at dens) and flags for the grid's subdomain. */
   void allocate_subdomain();
@@ -566,8 +607,12 @@ private:
     return static_cast<std::uint32_t>(bits);
   }
   bool field_valid(std::size_t n) const { return (m_field_valid[n >> 6] >> (n & 63)) & 1u; }
-  std::vector<std::uint16_t> m_flag; ///< 0 fluid, b + 1 boundary b (ghosts too)
-  std::vector<BoundarySpec> m_boundaries;
+  std::vector<std::uint16_t> m_flag;      ///< 0 fluid, b + 1 boundary b (ghosts too)
+  std::vector<BoundarySpec> m_boundaries; ///< those the flags are of
+  /// set by set_boundaries(), flagged by update_boundaries()
+  std::vector<BoundarySpec> m_pending_boundaries;
+  bool m_boundaries_pending = false;
+  std::uint64_t m_n_flaggings = 0;
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
   /// Pairs of places in m_f that a fix-up after the update copies between

@@ -619,6 +619,7 @@ void LBFluid::build_halo_pairs() {
 }
 
 std::size_t LBFluid::halo_bytes() const {
+  flags_current();
   std::size_t n = 0;
   for (const HaloPeer& p : m_peers)
     n += p.face.size(); // sent by a fill, as many as the ghosts folded back
@@ -676,6 +677,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
 }
 
 void LBFluid::refresh_ghost_velocities() {
+  update_boundaries();
   if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
     return;
   const auto start = std::chrono::steady_clock::now();
@@ -786,6 +788,7 @@ void LBFluid::check_usable() const {
 }
 
 void LBFluid::step() {
+  update_boundaries();
   check_usable();
   ++m_state_version;
   with_populations([this](auto* f) { step_stored_as(f); });

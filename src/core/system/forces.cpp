@@ -19,6 +19,9 @@ void System::prepare_step(int moved) {
       cells.update_ghosts(particles, box);
     return;
   }
+  // the cuts the owners follow: boundaries set since the last flagging are
+  // flagged first (they may move the cuts; collective like this step)
+  m_lb->update_boundaries();
   // Particles spread over the ranks: every rank tests its own (moved: 1
   // beyond the skin, 0 not, -1 test here, -3 too fast a step), all agree
   // on the largest code: 0 the copies are refreshed; 1 all copies made
@@ -456,6 +459,7 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // calls differ from one run -- the last step's coupling force recomputed
   // against the fluid updated since)
   if (m_lb) {
+    m_lb->update_boundaries(); // boundaries set since the last run: flagged now, once
     m_lb->validate(box, m_time_step);
     m_lb->check_usable(); // refused before any particle moves or time advances
     // populations, boundaries or ext_force_density set since the last run:

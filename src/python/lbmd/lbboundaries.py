@@ -1,6 +1,8 @@
 """Lattice-Boltzmann boundaries (ESPResSo 4.2 ``espressomd.lbboundaries``):
 nodes whose centre lies inside a shape are solid; halfway bounce-back, moving
-with ``velocity``; ``get_force()`` is the force the fluid exerts on them."""
+with ``velocity``; ``get_force()`` is the force the fluid exerts on them.
+Adding, removing or clearing boundaries is cheap: the nodes are flagged once,
+at the fluid's next use (doc/lb.md)."""
 import numpy as np
 
 from .shapes import Shape
@@ -43,8 +45,10 @@ class LBBoundaries:
         return None
 
     def _apply(self, core):
-        """Flags the boundary nodes of a fluid's lattice (also called by
-        LBFluid._activate, before the fluid is listed in system.actors)."""
+        """Hands the boundaries to a fluid's lattice (also called by
+        LBFluid._activate, before the fluid is listed in system.actors).
+        Cheap: the fluid checks them and flags its nodes later, once, at
+        the first call that needs the flags (collective under MPI)."""
         core.set_boundaries([(b.shape._core, b.velocity) for b in self._list])
 
     def _update(self):
