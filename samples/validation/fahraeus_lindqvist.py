@@ -82,7 +82,10 @@ A time series of both (and of the cells' mean distance from the axis and
 their volume) is sampled every half strain unit (gamma_w t); the averages
 are taken over the strain after --transient (the time series,
 doc/validation.md, shows when the suspension is steady), with the spread of
-4 blocks of the window as the statistical error.
+4 blocks of the window as the statistical error. A run that stops with
+SimulationInstability (a membrane folded through itself: D 15 and 20 at
+Ca 10 after strain 105-110) is summarised up to there when the window
+holds at least 8 samples, and says so in the column `stopped`.
 
 Writes <output>/fahraeus_lindqvist.csv (one row per run: D, L, n, H_T,
 H_D, eta_rel and H_T/H_D with the Pries values and relative errors, their
