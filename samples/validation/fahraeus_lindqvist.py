@@ -4,8 +4,9 @@ blood cell suspension in a straight tube, against the in-vitro fits of
 Pries et al.
 
     pyoif samples/validation/fahraeus_lindqvist.py [--diameters 10] [--hd 0.25] [--ht H_T]
-        [--ca 2] [--strain 60] [--transient 20] [--length-ratio 4] [--gamma-factor 1]
-        [--seed 1] [--output DIR]
+        [--ca 10] [--strain 150] [--transient 50] [--length-ratio 4] [--gamma-factor 1]
+        [--node-mass-ratio 0.3] [--kvisc 1] [--seed 1] [--output DIR]
+    pyoif samples/validation/fahraeus_lindqvist.py --combine DIR [DIR ...] --output DIR
 
 References (D the tube diameter in um, H_D the discharge haematocrit):
 
@@ -30,16 +31,29 @@ constraint on the membrane nodes (soft-sphere repulsion within 1 um of the
 wall). Red blood cells: the project's rbc374 Evans-Fung mesh of radius
 3.91 um with the PyOIF paper's moduli ks 0.005, kb 0.02, kal 0.007,
 kag 0.7, kv 0.9 (Jancigova et al., PLoS Comput. Biol. 16, e1008249, 2020),
-membrane_collision between cells, coupling friction suggest_LBgamma; the
-fluid inside a cell is plasma (viscosity ratio 1, real cells about 5).
+membrane_collision between cells (strength a = 0.01, cutoff 1 um; both contact
+strengths raised as Ca / 2 above Ca 2: they must hold against the viscous
+force, which grows with the shear rate), coupling friction gamma = suggest_LBgamma; the fluid inside a
+cell is plasma (viscosity ratio 1, real cells about 5). As in the flagship
+(samples/cell_flow_in_bifurcation.py): the nodes' mass m set by
+gamma dt / m = 0.3 (--node-mass-ratio; m 0.51, the former mass 1 is 0.152)
+and a membrane viscosity kvisc 1 (--kvisc; 0 before). With mass 1 and no
+membrane viscosity, one cell folded like a taco and its membrane passed
+through itself at strain 10-14 at Ca 5 and 10 (the run stopped with
+SimulationInstability); with the lighter nodes and kvisc 1, Ca 5 and 10
+ran 60 and 150 strain units.
 
 Haematocrit. The number of cells is set from the tube volume: the tube
 haematocrit seeded is H_T = n V_cell / (pi D^2/4 L). By default n follows
 from the target discharge haematocrit --hd through the Pries 1990 ratio
 (only to choose n; H_D itself is measured), and L is adjusted to a whole
 number of lattice nodes so that n V_cell / (pi D^2/4 L) is as close as
-possible to that H_T; --ht gives H_T directly. Cells are seeded at random
-(oif.seed_cells, non-overlapping, clear of the wall, random orientations).
+possible to that H_T; --ht gives H_T directly. Tubes narrower than 12 um:
+cells seeded at random (oif.seed_cells, non-overlapping, clear of the wall,
+random orientations). Wider tubes (more cells): random placement jams
+(D 15, 18 cells: at most 16 placed in 20000 tries), so the cells are packed
+greedily on a grid (discs facing along x, y or z) and n of the packed
+places drawn at random (packed_placements); the flow mixes them.
 
 Flow. A uniform body force density f drives the fluid (a pressure gradient:
 it acts on the plasma and on the fluid inside the cells alike). f is set by
@@ -47,13 +61,12 @@ the capillary number of the cell-free flow, Ca = eta gamma_w r / Gs, with
 gamma_w = f D / (4 eta) the wall shear rate of Poiseuille flow, r 3.91 um
 and Gs = sqrt(3) ks / 4 the membrane's shear modulus (doc/model.md). The
 Pries fits are the viscosity at high shear, where it no longer depends on
-the shear rate (cells deformed and aligned). The default Ca = 2 (wall shear
-rate 740 1/s, mean velocity over diameter about 90 1/s: above the 50 1/s
-usually taken as high shear) is the largest that held: at Ca 5 and 10 one
-cell folded like a taco and its membrane passed through itself at strain
-10-14 (the run stops with SimulationInstability). Whether eta_rel has
-reached its high-shear plateau at Ca 2 was not measured (--ca takes
-several values).
+the shear rate (cells deformed and aligned). The default Ca = 10 (wall
+shear rate 3700 1/s, mean velocity over diameter about 410 1/s at D 10: well
+above the 50 1/s usually taken as high shear). At D 10, H_T/H_D still falls
+with Ca (Ca 2, 5, 10: +20 %, +18 %, +11 to +13 % above the Pries fit) while
+eta_rel stays within 4 %: no plateau of the Fahraeus effect was reached
+(doc/validation.md).
 
 Measurements (per tube, the same body force):
 - Q_plasma: the flow rate of a cell-free run in the same lattice tube (it
@@ -69,7 +82,10 @@ A time series of both (and of the cells' mean distance from the axis and
 their volume) is sampled every half strain unit (gamma_w t); the averages
 are taken over the strain after --transient (the time series,
 doc/validation.md, shows when the suspension is steady), with the spread of
-4 blocks of the window as the statistical error.
+4 blocks of the window as the statistical error. A run that stops with
+SimulationInstability (a membrane folded through itself: D 15 and 20 at
+Ca 10 after strain 105-110) is summarised up to there when the window
+holds at least 8 samples, and says so in the column `stopped`.
 
 Writes <output>/fahraeus_lindqvist.csv (one row per run: D, L, n, H_T,
 H_D, eta_rel and H_T/H_D with the Pries values and relative errors, their
@@ -98,6 +114,10 @@ GS = math.sqrt(3.0) / 4.0 * RBC_MODULI["ks"]  # membrane shear modulus (doc/mode
 CELL_TYPE, WALL_TYPE = 0, 10
 SAMPLE_STRAIN = 0.5  # strain units between samples of the time series
 BLOCKS = 4  # blocks of the averaging window for the statistical error
+NODE_MASS_RATIO = 0.3  # gamma dt / m of the membrane nodes (None: mass 1, i.e. 0.152)
+KVISC = 1.0  # membrane viscosity (the edges' dashpots), as the flagship's
+CONTACT_A = 0.01  # membrane_collision strength between cells up to Ca 2 (a Ca / 2 above)
+WALL_A = 1e-4  # soft-sphere strength of the wall on the nodes up to Ca 2 (a Ca / 2 above)
 
 
 def pries_viscosity(d_um, hd):
@@ -135,20 +155,65 @@ def tube_layout(diameter, length_ratio, ht, cell_volume):
     return n, length, n * cell_volume / (area * length)
 
 
+def packed_placements(cell_type, centre, radius, length, n, seed, margin=0.5, gap=1.0, step=0.5):
+    """Placements (origin, rotate) of n cells in the tube, for where random
+    placement (oif.seed_cells) jams (D 15 and 20 at H_T 0.16): the cells'
+    discs facing along x, y or z, packed greedily on a grid of origins (x
+    step `step`, y and z step 1.5 step; nodes at least `margin` from the
+    wall, `gap` from other cells, periodic in x), then n of the packed
+    cells drawn at random."""
+    from scipy.spatial import cKDTree
+    from oif import geometry
+    nodes0 = np.asarray(cell_type.mesh.positions(), dtype=float)
+    angles = ([0.0, 0.0, 0.0], [math.pi / 2, 0.0, 0.0], [0.0, math.pi / 2, 0.0])  # normal z, y, x
+    shapes_rot = [nodes0 @ geometry.rotation_matrix(a).T for a in angles]
+    offsets = np.arange(-radius, radius + 1e-9, 1.5 * step)
+    fits = []  # (y, z, orientation) whose nodes keep the margin from the wall
+    for o, nodes in enumerate(shapes_rot):
+        for dy in offsets:
+            for dz in offsets:
+                r = np.hypot(nodes[:, 1] + dy, nodes[:, 2] + dz)
+                if r.max() <= radius - margin:
+                    fits.append((dy, dz, o))
+    fits.sort(key=lambda f: -math.hypot(f[0], f[1]))  # from the wall inwards: denser
+    side = 4.0 * (radius + 1.0)
+    placed, tree, all_nodes = [], None, np.empty((0, 3))
+    for x in np.arange(0.0, length, step):
+        for dy, dz, o in fits:
+            pos = shapes_rot[o] + [x, centre[1] + dy, centre[2] + dz]
+            pos[:, 0] %= length
+            if tree is not None and np.isfinite(tree.query(pos, distance_upper_bound=gap)[0]).any():
+                continue
+            placed.append(([x, centre[1] + dy, centre[2] + dz], angles[o]))
+            all_nodes = np.vstack([all_nodes, pos])
+            tree = cKDTree(all_nodes, boxsize=[length, side, side])
+    if len(placed) < n:
+        raise RuntimeError(f"packed_placements: only {len(placed)} cells fit in the tube of radius {radius}, "
+                           f"length {length}; {n} asked: lower the haematocrit")
+    pick = np.random.default_rng(seed).choice(len(placed), size=n, replace=False)
+    return [placed[i] for i in sorted(pick)]
+
+
 def flow_rate(fluid, length):
     """Q = sum over the nodes of u_x agrid^3 / L (boundary nodes carry no flow)."""
     u = fluid[:, :, :].velocity[..., 0]
     return float(u.sum()) * AGRID ** 3 / length
 
 
-def run_tube(diameter, ca=2.0, hd_target=0.25, ht=None, length_ratio=4.0, strain=60.0, transient=20.0,
-             gamma_factor=1.0, seed=1, progress=None, vtk=None):
+def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strain=150.0, transient=50.0,
+             gamma_factor=1.0, seed=1, node_mass_ratio=NODE_MASS_RATIO, kvisc=KVISC, progress=None, vtk=None):
     """One tube: the cell-free run, then the suspension. Returns (summary
     dict, time series list of dicts)."""
     for name, value in (("diameter", diameter), ("ca", ca), ("length_ratio", length_ratio), ("strain", strain),
                         ("gamma_factor", gamma_factor)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"run_tube: parameter '{name}' must be a finite number > 0, got {value!r}")
+    if node_mass_ratio is not None and not (isinstance(node_mass_ratio, (int, float))
+                                            and math.isfinite(node_mass_ratio) and 0 < node_mass_ratio <= 1):
+        raise ValueError(f"run_tube: parameter 'node_mass_ratio' (gamma dt / m) must be in (0, 1] or None, "
+                         f"got {node_mass_ratio!r}")
+    if not (isinstance(kvisc, (int, float)) and math.isfinite(kvisc) and kvisc >= 0):
+        raise ValueError(f"run_tube: parameter 'kvisc' must be a finite number >= 0, got {kvisc!r}")
     if not 2.0 * RBC_RADIUS + 1.0 < diameter:
         raise ValueError(f"run_tube: parameter 'diameter' {diameter} must exceed the cell's diameter "
                          f"{2 * RBC_RADIUS} + 1 um (the cells must fit)")
@@ -199,24 +264,32 @@ def run_tube(diameter, ca=2.0, hd_target=0.25, ht=None, length_ratio=4.0, strain
 
     # the suspension, from the developed plasma flow
     ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(RBC_RADIUS,) * 3, normal=True,
-                         **RBC_MODULI)
+                         kvisc=kvisc, **RBC_MODULI)
+    gamma = gamma_factor * ct.suggest_LBgamma(visc=VISC, dens=DENS)
+    node_mass = 1.0 if node_mass_ratio is None else gamma * TIME_STEP / node_mass_ratio
     cells = None
-    for attempt in range(20):  # random placement in a narrow tube may need another seed
+    for attempt in range(20 if diameter < 12.0 else 0):  # random placement in a narrow tube may need another seed
         try:
             cells = oif.seed_cells(system, ct, counts=n_cells, boundaries=[tube], particle_types=[CELL_TYPE],
-                                   seed=seed + 1000 * attempt)
+                                   seed=seed + 1000 * attempt, particle_mass=node_mass)
             break
         except oif.SeedingError:
             continue
-    if cells is None:
-        raise RuntimeError(f"run_tube: could not seed {n_cells} cells in the tube of diameter {diameter}, "
-                           f"length {length} (H_T {ht_seeded:.3f}); lower the haematocrit")
-    gamma = gamma_factor * ct.suggest_LBgamma(visc=VISC, dens=DENS)
+    if cells is None:  # wider tubes (more cells): random placement jams; packed, then drawn at random
+        cells = [oif.OifCell(cell_type=ct, particle_type=CELL_TYPE, origin=origin, rotate=rotate,
+                             particle_mass=node_mass)
+                 for origin, rotate in packed_placements(ct, centre, radius, length, n_cells, seed)]
     system.thermostat.set_lb(LB_fluid=fluid, gamma=gamma)
     system.constraints.add(shape=tube, particle_type=WALL_TYPE)
     # contacts: repulsion strong against the viscous force on a node, eta gamma_w x (area per node, 0.36 um^2)
-    system.non_bonded_inter[CELL_TYPE, WALL_TYPE].soft_sphere.set_params(a=1e-4, n=1.2, cutoff=0.5, offset=0.0)
-    system.non_bonded_inter[CELL_TYPE, CELL_TYPE].membrane_collision.set_params(a=0.01, n=4.0, cutoff=0.8,
+    # (set for Ca 2), both scaled with the shear rate above Ca 2 (at Ca 10 unscaled, two membranes passed
+    # through each other after strain 107 at D 10); the cells' contact reaches 1.0 um, beyond the mesh's
+    # longest edge, 0.85 um (doc/accuracy.md, Contacts; at 0.8 and Ca 10 two membranes still crossed)
+    scale = max(1.0, ca / 2.0)
+    system.non_bonded_inter[CELL_TYPE, WALL_TYPE].soft_sphere.set_params(a=WALL_A * scale, n=1.2, cutoff=0.5,
+                                                                       offset=0.0)
+    contact = CONTACT_A * scale
+    system.non_bonded_inter[CELL_TYPE, CELL_TYPE].membrane_collision.set_params(a=contact, n=4.0, cutoff=1.0,
                                                                               offset=0.0)
     v0 = np.array([c.volume() for c in cells])
     chunk = max(1, int(round(SAMPLE_STRAIN / (gamma_w * TIME_STEP))))
@@ -227,8 +300,18 @@ def run_tube(diameter, ca=2.0, hd_target=0.25, ht=None, length_ratio=4.0, strain
     worst_volume = 0.0
     cell_series = oif.CellSeries(vtk) if vtk else None
     t0 = time.process_time()
+    stopped = ""
     for k in range(n_samples):
-        system.integrator.run(chunk)
+        try:
+            system.integrator.run(chunk)
+        except lbmd.SimulationInstability as e:
+            # a membrane folded through itself (D 15 and 20 at Ca 10, after strain 100 or so): with at
+            # least 2 samples per block of the window the run is summarised up to here and says so
+            n_window = sum(1 for r in series if r["strain"] > transient + 1e-9)
+            if n_window < 2 * BLOCKS:
+                raise
+            stopped = f"strain {series[-1]['strain']:.1f}: {str(e).split(':')[0]}"
+            break
         if cell_series:
             cell_series.write(cells, system.time)
         q = flow_rate(fluid, length)
@@ -277,10 +360,12 @@ def run_tube(diameter, ca=2.0, hd_target=0.25, ht=None, length_ratio=4.0, strain
         "Q_suspension": float(q_w.mean()), "force_density": f, "Ca": ca, "wall_shear_rate": gamma_w,
         "wall_shear_rate_per_s": gamma_w * 1e6, "pseudo_shear_rate_per_s": u_mean / diameter * 1e6,
         "mean_velocity": u_mean, "Re": DENS * u_mean * diameter / ETA, "gamma": gamma,
-        "gamma_factor": gamma_factor, "strain": series[-1]["strain"], "transient": transient,
-        "window_samples": len(window), "worst_volume_dev": worst_volume,
+        "gamma_factor": gamma_factor, "node_mass": node_mass,
+        "gamma_dt_over_m": gamma * TIME_STEP / node_mass, "kvisc": kvisc, "contact_a": contact,
+        "strain": series[-1]["strain"], "transient": transient,
+        "window_samples": len(window), "stopped": stopped, "worst_volume_dev": worst_volume,
         "final_axis_offset_over_R": series[-1]["mean_axis_offset_over_R"],
-        "steps": chunk * n_samples, "plasma_steps": plasma_steps, "cpu_s": cpu, "plasma_cpu_s": plasma_cpu,
+        "steps": chunk * len(series), "plasma_steps": plasma_steps, "cpu_s": cpu, "plasma_cpu_s": plasma_cpu,
         "seed": seed}
     return summary, series
 
@@ -318,8 +403,9 @@ def plot(rows, series, path):
     for r in rows:
         s = [q for q in series if q["diameter"] == r["diameter"] and q.get("Ca", r["Ca"]) == r["Ca"]]
         x = [q["strain"] for q in s]
-        line, = ax.plot(x, [q["eta_rel"] for q in s], "-", lw=1.0, label=f"η_rel, D {r['diameter']:g}")
-        ax.plot(x, [q["H_D"] for q in s], "--", lw=1.0, color=line.get_color(), label=f"H_D, D {r['diameter']:g}")
+        tag = f"D {r['diameter']:g}, Ca {r['Ca']:g}"
+        line, = ax.plot(x, [q["eta_rel"] for q in s], "-", lw=1.0, label=f"η_rel, {tag}")
+        ax.plot(x, [q["H_D"] for q in s], "--", lw=1.0, color=line.get_color(), label=f"H_D, {tag}")
         ax.axvline(r["transient"], color=line.get_color(), lw=0.6, ls=":")
     ax.set_xlabel("strain γ_w t (wall shear rate of the plasma flow)")
     ax.set_ylabel("η_rel (solid), H_D (dashed)")
@@ -336,16 +422,25 @@ def main():
     parser.add_argument("--hd", type=float, default=0.25,
                         help="target discharge haematocrit: sets the number of cells through Pries 1990")
     parser.add_argument("--ht", type=float, default=None, help="tube haematocrit to seed (instead of --hd)")
-    parser.add_argument("--ca", type=float, nargs="+", default=[2.0],
+    parser.add_argument("--ca", type=float, nargs="+", default=[10.0],
                         help="capillary number(s) eta gamma_w r / Gs of the driving (plasma wall shear rate)")
-    parser.add_argument("--strain", type=float, default=60.0, help="run length in wall strain units gamma_w t")
-    parser.add_argument("--transient", type=float, default=20.0,
+    parser.add_argument("--strain", type=float, default=150.0, help="run length in wall strain units gamma_w t")
+    parser.add_argument("--transient", type=float, default=50.0,
                         help="strain discarded before averaging (see the time series)")
     parser.add_argument("--length-ratio", type=float, default=4.0, help="tube length / diameter (about)")
     parser.add_argument("--gamma-factor", type=float, default=1.0, help="coupling friction / suggest_LBgamma")
     parser.add_argument("--seed", type=int, default=1, help="seed of the cells' placement")
+    parser.add_argument("--node-mass-ratio", type=float, default=NODE_MASS_RATIO,
+                        help="gamma dt / m of the membrane nodes: sets their mass m from the coupling "
+                             "friction gamma (0.152 gives the former mass 1)")
+    parser.add_argument("--kvisc", type=float, default=KVISC, help="membrane viscosity kvisc (lattice units)")
+    parser.add_argument("--combine", nargs="+", default=None, metavar="DIR",
+                        help="run nothing: join the CSVs of earlier runs' output folders into --output "
+                             "(tables and figure)")
     parser.add_argument("--output", default="output_fahraeus_lindqvist", help="folder for the CSV and PNG")
     args = parser.parse_args()
+    if args.combine:
+        return combine(args.combine, args.output)
     if any(not np.isfinite(d) or not 2.0 * RBC_RADIUS + 1.0 < d <= 60.0 for d in args.diameters):
         parser.error(f"--diameters: expected diameters in ({2 * RBC_RADIUS + 1:g}, 60] um, got {args.diameters}")
     if not 0 < args.hd < 0.6:
@@ -362,6 +457,10 @@ def main():
         parser.error(f"--length-ratio: expected at least 1.5, got {args.length_ratio}")
     if not args.gamma_factor > 0 or not np.isfinite(args.gamma_factor):
         parser.error(f"--gamma-factor: expected a factor > 0, got {args.gamma_factor}")
+    if args.node_mass_ratio is not None and not 0 < args.node_mass_ratio <= 1:
+        parser.error(f"--node-mass-ratio: expected gamma dt / m in (0, 1], got {args.node_mass_ratio}")
+    if not args.kvisc >= 0 or not np.isfinite(args.kvisc):
+        parser.error(f"--kvisc: expected a membrane viscosity >= 0, got {args.kvisc}")
     if args.seed < 0:
         parser.error(f"--seed: expected an integer >= 0, got {args.seed}")
     os.makedirs(args.output, exist_ok=True)
@@ -375,7 +474,8 @@ def main():
                       f"{r['worst_volume_dev']:.4f}  wall gap {r['min_wall_gap']:.3f}", flush=True)
             s, ts = run_tube(d, ca=ca, hd_target=args.hd, ht=args.ht, length_ratio=args.length_ratio,
                              strain=args.strain, transient=args.transient, gamma_factor=args.gamma_factor,
-                             seed=args.seed, progress=progress)
+                             seed=args.seed, node_mass_ratio=args.node_mass_ratio, kvisc=args.kvisc,
+                             progress=progress)
             for r in ts:
                 r["Ca"] = ca
             rows.append(s)
@@ -386,10 +486,18 @@ def main():
                   f"{100 * s['eta_rel_error']:+.1f} %); H_D {s['H_D']:.4f} +- {s['H_D_err']:.4f}; "
                   f"H_T/H_D {s['HT_over_HD']:.4f} (Pries {s['HT_over_HD_pries']:.4f}, "
                   f"{100 * s['HT_over_HD_error']:+.1f} %); Re {s['Re']:.3f}; worst volume dev "
-                  f"{s['worst_volume_dev']:.4f}; {s['steps']} steps, {s['cpu_s']:.1f} CPU s", flush=True)
-    stem = os.path.join(args.output, "fahraeus_lindqvist")
+                  f"{s['worst_volume_dev']:.4f}; {s['steps']} steps, {s['cpu_s']:.1f} CPU s"
+                  + (f"; STOPPED at {s['stopped']}" if s["stopped"] else ""), flush=True)
+    write_results(rows, series, args.output)
+
+
+def write_results(rows, series, output):
+    """The two CSVs, the figure and the worst errors into the folder output."""
+    os.makedirs(output, exist_ok=True)
+    stem = os.path.join(output, "fahraeus_lindqvist")
+    fields = list(dict.fromkeys(k for r in rows for k in r))
     with open(stem + ".csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w = csv.DictWriter(f, fieldnames=fields, restval="")
         w.writeheader()
         w.writerows(rows)
     with open(stem + "_timeseries.csv", "w", newline="") as f:
@@ -399,8 +507,32 @@ def main():
     plot(rows, series, stem + ".png")
     print(f"worst |eta_rel / Pries - 1| {max(abs(r['eta_rel_error']) for r in rows):.3f}, "
           f"worst |(H_T/H_D) / Pries - 1| {max(abs(r['HT_over_HD_error']) for r in rows):.3f}")
-    print(f"total {sum(r['cpu_s'] + r['plasma_cpu_s'] for r in rows):.1f} CPU s")
+    print(f"total {sum(float(r['cpu_s']) + float(r['plasma_cpu_s']) for r in rows):.1f} CPU s")
     print("wrote", stem + ".csv", stem + "_timeseries.csv", stem + ".png")
+
+
+def combine(folders, output):
+    """Join the results of earlier runs (their output folders) into one
+    table, time series and figure in output."""
+    def number(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    rows, series = [], []
+    for folder in folders:
+        stem = os.path.join(folder, "fahraeus_lindqvist")
+        for name, target in ((stem + ".csv", rows), (stem + "_timeseries.csv", series)):
+            try:
+                with open(name, newline="") as f:
+                    target.extend({k: number(v) for k, v in r.items()} for r in csv.DictReader(f))
+            except OSError as e:
+                raise OSError(f"--combine: cannot read {name}: {e.strerror}") from e
+    if not rows:
+        raise ValueError(f"--combine: no runs in {folders}")
+    rows.sort(key=lambda r: (r["diameter"], r["Ca"]))
+    write_results(rows, series, output)
 
 
 if __name__ == "__main__":
