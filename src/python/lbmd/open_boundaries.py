@@ -235,8 +235,7 @@ class OpenBoundaries:
         core = self._fluid._core
         if core is None:
             return
-        system = self._fluid._system
-        self._walls = tuple(id(b) for b in system.lbboundaries) if system is not None else ()
+        self._walls = self._wall_signature()
         specs = []
         for f in self._list:
             axis, high = _face("", f.face)
@@ -261,13 +260,16 @@ class OpenBoundaries:
             core.set_open_boundaries([])
             self._faces = []
 
+    def _wall_signature(self):
+        """Which boundaries the system has (the inlet profiles follow them)."""
+        system = self._fluid._system
+        return tuple(id(b) for b in system.lbboundaries) if system is not None else ()
+
     def _before_run(self):
         """At a run's start: both faces of each open axis there, and inlet
         profiles made again if the walls changed since."""
         self.check_complete()
-        system = self._fluid._system
-        walls = tuple(id(b) for b in system.lbboundaries) if system is not None else ()
-        if walls != self.__dict__.get("_walls"):
+        if self._wall_signature() != self.__dict__.get("_walls"):
             self._apply()
 
     def check_complete(self):

@@ -368,11 +368,8 @@ class System:
 
     def _core_fluid(self):
         """The active fluid's C++ object, or None."""
-        for actor in self.__dict__.get("actors", ()):
-            core = getattr(actor, "_core", None)
-            if core is not None:
-                return core
-        return None
+        fluid = self._lb_fluid()
+        return fluid._core if fluid is not None else None
 
     def __init__(self, **kwargs):
         v = parse("System", [Param("box_l", "vec3"), Param("periodicity", "bool3", [True, True, True]),
