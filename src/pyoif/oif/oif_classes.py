@@ -1257,7 +1257,7 @@ class OifCell:
         """PyOIF's elastic-force analysis. Flags in the order (ks, kb, kal,
         kag, kv, total): el_forces selects per-node force magnitudes to write
         into vtk_file (as point data) or one force to write as raw x y z rows
-        into raw_data_file; f_metric selects sums over nodes of |F|, returned
+        into raw_data_file; f_metric selects sums over nodes of ``|F|``, returned
         as a list of 6 (0 if none selected)."""
         for name, flags in (("el_forces", el_forces), ("f_metric", f_metric)):
             if isinstance(flags, (str, bytes)) or not isinstance(flags, (list, tuple, np.ndarray)):

@@ -59,7 +59,7 @@ def angle_btw_vectors(a, b):
 
 
 def discard_epsilon(x):
-    """0 for |x| < small_epsilon, else x."""
+    """0 for ``|x| < small_epsilon``, else x."""
     return 0.0 if -small_epsilon < x < small_epsilon else x
 
 

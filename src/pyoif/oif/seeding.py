@@ -1,4 +1,4 @@
-"""Random placement of many cells in a geometry, without overlaps.
+"""Random placement of many cells in a geometry, without overlaps::
 
     cells = oif.seed_cells(system, [rbc_type, rare_type], counts=[40, 1],
                            boundaries=[wall_bottom, wall_top, obstacle],

@@ -169,7 +169,7 @@ class OifLocalForces(BondedInteraction):
     Bond: for PyOIF's Angle(A, B, C, D) with shared edge BC, the particle B
     owns the bond with partners A, C, D: ``B.add_bond((bond, A, C, D))``, or in
     bulk ``system.part.add_bonds(bond, ids, per_bond)`` with rows (B, A, C, D).
-    The reference values r0 = |BC|, phi0 = angle_btw_triangles(A, B, C, D),
+    The reference values r0 = ``|BC|``, phi0 = angle_btw_triangles(A, B, C, D),
     A01 = area ABC, A02 = area BCD are per bond (``per_bond`` rows
     (r0, phi0, A01, A02)), so one instance serves a whole cell type; without
     ``per_bond`` every bond gets this instance's r0, phi0, A01, A02 (the

@@ -314,8 +314,8 @@ def oif_moduli_from_si(units=None, *, shear_modulus=None, bending_modulus=None, 
     ================  =====================  ========================================
     shear_modulus µ0  ks (eq. 3, N/m)        µ0 = (√3/4) ks
     bending_modulus   kb (eq. 4, J)          kc = (√3/2) kb
-    local_area_...    kal (eq. 5, N/m)       K_local = kal/2
-    global_area_...   kag (eq. 6, N/m)       K_global = kag/2
+    local area        kal (eq. 5, N/m)       K_local = kal/2
+    global area       kag (eq. 6, N/m)       K_global = kag/2
     volume_modulus    kv (eq. 7, Pa)         kv (a bulk modulus of the enclosed volume)
     membrane_visc.    kvisc (kg/s)           η_m = (√3/4) kvisc (2-D, Pa s m)
     ================  =====================  ========================================
