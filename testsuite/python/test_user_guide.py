@@ -57,12 +57,10 @@ class GuideExamples(unittest.TestCase):
 
 class GuideBuild(unittest.TestCase):
     def test_builds_without_warnings(self):
-        try:
-            import sphinx  # noqa: F401
-            import myst_parser  # noqa: F401
-        except ImportError as e:
-            self.fail(f"the guide needs Debian's python3-sphinx and python3-myst-parser "
-                      f"(maintainer/install-deps.sh): {e}")
+        import importlib.util
+        missing = [m for m in ("sphinx", "myst_parser", "sphinx_rtd_theme") if importlib.util.find_spec(m) is None]
+        self.assertEqual(missing, [], "the guide needs Debian's python3-sphinx, python3-myst-parser and "
+                                      "python3-sphinx-rtd-theme (maintainer/install-deps.sh)")
         with tempfile.TemporaryDirectory() as out:
             html = os.path.join(out, "html")
             run = subprocess.run([sys.executable, os.path.join(SOURCE, "maintainer", "build_guide.py"), BUILD, html],
