@@ -216,7 +216,9 @@ class H5mdWriter:
         grp.create_dataset("time", shape=(0,), maxshape=(None,), dtype=np.float64, chunks=(1024,))
         per_particle = chunk_rows is None
         maxshape = (None,) + ((None,) + frame_shape[1:] if per_particle else frame_shape)
-        chunks = (1,) + ((max(1, min(4096, len(self.system.part) or 1)),) + frame_shape[1:] if per_particle
+        # one frame per chunk; at least 64 rows, so that a particle axis that grows
+        # from few particles (variable_particles) does not end in tiny chunks
+        chunks = (1,) + ((min(4096, max(64, len(self.system.part))),) + frame_shape[1:] if per_particle
                          else frame_shape)
         grp.create_dataset("value", shape=(0,) + frame_shape, maxshape=maxshape, dtype=dtype, chunks=chunks,
                            fillvalue=fill, compression=self.compression)
