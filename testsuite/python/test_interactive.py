@@ -150,6 +150,25 @@ class Progress(unittest.TestCase):
         self.assertRegex(summary, r"^integrator.run: 150 steps \(time 0\.7 -> 15\.7\) in [0-9.]+ s, [0-9.]+ steps/s; "
                                   r"fluid [0-9.]+ MLUPS \(16x12x12 nodes\); 1 cell: [0-9.]+ s per cell per 1000 steps")
 
+    def test_bar_for_a_script_loop(self):
+        from lbmd.progress import Bar
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            bar = Bar(100, initial=20, mode="lines", every=0.0)
+            bar.update(30, postfix="entries 3")
+            bar.update(50)
+            bar.close()
+        lines = out.getvalue().splitlines()
+        self.assertEqual(len(lines), 2)
+        self.assertRegex(lines[0], r"^50/100 steps +[0-9]+ steps/s +[0-9]+ s left  entries 3$")
+        self.assertTrue(lines[1].startswith("100/100 steps"))
+        with contextlib.redirect_stdout(io.StringIO()) as quiet:
+            off = Bar(10, mode="off")
+            off.update(10)
+        self.assertEqual(quiet.getvalue(), "")
+        with self.assertRaisesRegex(ValueError, "mode must be one of auto, bar, lines, off"):
+            Bar(10, mode="verbose")
+
     def test_zero_steps_and_bad_value(self):
         system, _, _ = scene()
         out = io.StringIO()

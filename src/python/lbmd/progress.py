@@ -5,7 +5,11 @@ cells' share with oif cells). The chunks are ordinary ``run()`` calls, whose
 results equal one long run bit for bit (System::integrate keeps the forces
 of the last step across calls). Under MPI rank 0 alone prints; it chooses
 the chunk lengths and tells the other ranks, so that every rank makes the
-same calls."""
+same calls.
+
+``Bar(total, initial=0, mode="auto")`` is the bar itself, for a script
+that runs in its own loop (output between runs): ``bar.update(n,
+postfix="...")`` after each run, ``bar.close()`` at the end."""
 import sys
 import time as wallclock
 
@@ -42,31 +46,74 @@ def summary(system, steps, wall, before, after, t0):
     n_cells = _cells(system)
     if n_cells and steps:
         cells_s = sum(after[k] - before[k] for k in ("membrane", "non_bonded"))
-        parts.append(f"{n_cells} cell{'s' if n_cells > 1 else ''}: {1000.0 * cells_s / n_cells / steps:.4f} s per cell per 1000 steps "
-                     f"(membrane and contacts)")
+        parts.append(f"{n_cells} cell{'s' if n_cells > 1 else ''}: {1000.0 * cells_s / n_cells / steps:.4f} s "
+                     f"per cell per 1000 steps (membrane and contacts)")
     return "; ".join(parts)
 
 
+class Bar:
+    """Progress of a run of ``total`` steps, on rank 0 only (other ranks: no
+    output). mode: "bar" (a tqdm bar on stderr: steps, steps/s, time left and
+    a postfix), "lines" (a line on stdout every ``every`` seconds and at the
+    end: steps, steps/s, time left, postfix; for logs), "off", or "auto"
+    (a bar on a terminal, lines otherwise). Without tqdm, "bar" becomes
+    "lines" with a note."""
+
+    MODES = ("auto", "bar", "lines", "off")
+
+    def __init__(self, total, initial=0, mode="auto", every=10.0):
+        from . import rank
+        if mode not in self.MODES:
+            raise ValueError(f"progress: mode must be one of {', '.join(self.MODES)}, got {mode!r}")
+        if mode == "auto":
+            mode = "bar" if sys.stderr.isatty() else "lines"
+        self.mode = mode if rank == 0 else "off"
+        self.total, self.done, self.start, self.every = int(total), int(initial), int(initial), float(every)
+        self.started = self.said = wallclock.monotonic()
+        self._tqdm = None
+        if self.mode == "bar":
+            try:
+                from tqdm import tqdm
+            except ImportError:  # pragma: no cover - python3-tqdm is a dependency
+                print("(no progress bar: Debian's python3-tqdm is not installed; a line every "
+                      f"{self.every:g} s instead)")
+                self.mode = "lines"
+            else:
+                self._tqdm = tqdm(total=self.total, initial=self.done, unit="step", dynamic_ncols=True,
+                                  mininterval=0.5 if sys.stderr.isatty() else 30.0,
+                                  bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} steps [{elapsed}<{remaining}, "
+                                             "{rate_fmt}{postfix}]")
+
+    def update(self, n, postfix=""):
+        """n more steps done; postfix: what to show beside them."""
+        self.done += int(n)
+        if self._tqdm is not None:
+            self._tqdm.update(int(n))
+            if postfix:
+                self._tqdm.set_postfix_str(postfix, refresh=False)
+        elif self.mode == "lines" and (wallclock.monotonic() - self.said >= self.every or self.done >= self.total):
+            self.said = wallclock.monotonic()
+            elapsed = self.said - self.started
+            rate = (self.done - self.start) / elapsed if elapsed > 0 else 0.0
+            left = (self.total - self.done) / rate if rate > 0 else 0.0
+            print(f"{self.done}/{self.total} steps  {rate:7.0f} steps/s  {left:6.0f} s left"
+                  + (f"  {postfix}" if postfix else ""), flush=True)
+
+    def close(self):
+        if self._tqdm is not None:
+            self._tqdm.close()
+            self._tqdm = None
+
+
 def run(integrator, steps, recalc_forces, reuse_forces, out=None):
-    """integrator.run(steps) in chunks of about CHUNK_SECONDS under a bar
-    (rank 0), then the summary line on rank 0's stdout (or out)."""
+    """integrator.run(steps) in chunks of about CHUNK_SECONDS under a Bar
+    (rank 0; "bar" mode), then the summary line on rank 0's stdout (or out)."""
     from . import comm, rank, size
     system = integrator._system
     before = integrator.timings()
     t0 = system.time
-    bar = None
-    if rank == 0:
-        try:
-            from tqdm import tqdm
-        except ImportError:  # pragma: no cover - python3-tqdm is a dependency
-            tqdm = None
-        if tqdm is not None:
-            end = system.time + steps * system.time_step
-            tty = sys.stderr.isatty()
-            bar = tqdm(total=steps, unit="step", dynamic_ncols=True, mininterval=0.5 if tty else 30.0,
-                       bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} steps [{elapsed}<{remaining}, "
-                                  "{rate_fmt}{postfix}]")
-            bar.set_postfix_str(f"time {system.time:.6g} of {end:.6g}", refresh=False)
+    end = t0 + steps * system.time_step
+    bar = Bar(steps, mode="bar")
     started = wallclock.perf_counter()
     done, chunk, first = 0, 1, True
     try:
@@ -81,14 +128,11 @@ def run(integrator, steps, recalc_forces, reuse_forces, out=None):
                 spent = wallclock.perf_counter() - t
                 per_step = spent / n if spent > 0 else 0.0
                 chunk = max(1, min(2 * chunk + 1, int(CHUNK_SECONDS / per_step) if per_step > 0 else 2 * chunk))
-                if bar is not None:
-                    bar.update(n)
-                    bar.set_postfix_str(f"time {system.time:.6g} of {end:.6g}", refresh=False)
+                bar.update(n, postfix=f"time {system.time:.6g} of {end:.6g}")
             if size > 1:
                 chunk = comm.bcast(chunk, root=0)
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
     wall = wallclock.perf_counter() - started
     after = integrator.timings()
     line = summary(system, steps, wall, before, after, t0)
