@@ -79,6 +79,13 @@ class CellFlow:
         self._last_time = system.time
         self._inlet_fluid = self._fluid_volume()
 
+    def __repr__(self):
+        mode = (f"haematocrit={self.haematocrit}" if self.haematocrit is not None else
+                f"rate={self.rate}" if self.rate is not None else "recycle=True")
+        return (f"CellFlow({mode}, axis={self.axis}, inlet={[v.tolist() for v in self.inlet]}, "
+                f"outlet={self.outlet}, {len(self.cells)} cells, added {len(self.added)}, "
+                f"removed {len(self.removed)})")
+
     def _fluid_volume(self):
         """Fluid volume of the inlet box: the box less the boundaries, on
         a grid of half-spacing points."""

@@ -43,6 +43,10 @@ class MeshData:
                                else np.asarray(triangle_lines))
         self.flipped = np.zeros(len(self.triangles), dtype=bool)
 
+    def __repr__(self):
+        return (f"MeshData({len(self.nodes)} nodes from '{self.nodes_file}', {len(self.triangles)} "
+                f"triangles from '{self.triangles_file}')")
+
     def node_at(self, i):
         """'file, line L' (or 'file, point k (counted from 0)') of node i."""
         return f"{self.nodes_file}, {self.node_ref(i)}" + ("" if self.lines else " (counted from 0)")

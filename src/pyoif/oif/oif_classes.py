@@ -190,6 +190,9 @@ class FixedPoint:
     def get_id(self):
         return self.id
 
+    def __repr__(self):
+        return f"FixedPoint(id={self.id}, pos={[self.x, self.y, self.z]})"
+
 
 class PartPoint:
     """A mesh node of a cell: a view of its particle."""
@@ -235,6 +238,9 @@ class PartPoint:
     def unkill_motion(self):
         self.part.fix = [False, False, False]
 
+    def __repr__(self):  # no position: reading it is a collective query under MPI
+        return f"PartPoint(id={self.id}, part_id={self.part_id})"
+
 
 def _check_points(owner, pts):
     for p in pts:
@@ -250,6 +256,9 @@ class Edge:
     def length(self):
         return vec_distance(self.A.get_pos(), self.B.get_pos())
 
+    def __repr__(self):
+        return f"Edge({self.A.id}, {self.B.id})"
+
 
 class Triangle:
     """Triangle (A, B, C); (B - A) x (C - A) points into the cell."""
@@ -260,6 +269,9 @@ class Triangle:
 
     def area(self):
         return area_triangle(self.A.get_pos(), self.B.get_pos(), self.C.get_pos())
+
+    def __repr__(self):
+        return f"Triangle({self.A.id}, {self.B.id}, {self.C.id})"
 
 
 class Angle:
@@ -272,6 +284,9 @@ class Angle:
     def size(self):
         return angle_btw_triangles(self.A.get_pos(), self.B.get_pos(), self.C.get_pos(), self.D.get_pos())
 
+    def __repr__(self):
+        return f"Angle({self.A.id}, {self.B.id}, {self.C.id}, {self.D.id})"
+
 
 class ThreeNeighbors:
     """Three well-spread neighbours of a node; their plane's normal
@@ -283,6 +298,9 @@ class ThreeNeighbors:
 
     def outer_normal(self):
         return get_triangle_normal(self.A.get_pos(), self.B.get_pos(), self.C.get_pos())
+
+    def __repr__(self):
+        return f"ThreeNeighbors({self.A.id}, {self.B.id}, {self.C.id})"
 
 
 # ---------------------------------------------------------------------------
@@ -592,6 +610,13 @@ class Mesh:
     def get_n_edges(self):
         return len(self.edge_ids)
 
+    def __repr__(self):
+        if self._topo is None:
+            return "Mesh(empty)"
+        what = f"cell mesh, mol_id {self._mol_id}" if self._mol_id is not None else "relaxed mesh"
+        source = f", '{os.path.basename(self.nodes_file)}'" if self.nodes_file else ""
+        return f"Mesh({what}{source}, {self._topo.n_nodes} nodes, {len(self._topo.triangles)} triangles)"
+
     def surface(self):
         return geo.surface(self.positions(), self._analysis_triangles())
 
@@ -842,6 +867,14 @@ class OifCellType:
                              f"formula gives {gamma:.4g} <= 0; choose the friction yourself")
         return float(gamma)
 
+    def __repr__(self):
+        moduli = ", ".join(f"{k}={getattr(self, k):g}" for k in ("ks", "kslin", "kb", "kal", "kag", "kv", "kvisc")
+                           if getattr(self, k) != 0)
+        source = f"'{os.path.basename(self.mesh.nodes_file)}', " if self.mesh.nodes_file else ""
+        return (f"OifCellType({source}{self.mesh.get_n_nodes()} nodes, resize={list(self.resize)}, "
+                f"{moduli or 'no moduli'}, normal={self.normal}, volume0={self.volume0:.6g}, "
+                f"surface0={self.surface0:.6g})")
+
     def exclusion_pairs(self, rings=DEFAULT_EXCLUSION_RINGS, distance=None):
         """Node pairs (i < j, mesh ids) excluded from self-cell contacts: up to
         `rings` edges apart, and (distance) closer than that in the relaxed mesh."""
@@ -993,6 +1026,11 @@ class OifCell:
 
     def get_n_edges(self):
         return self.mesh.get_n_edges()
+
+    def __repr__(self):  # the parameters it was made with: no (collective) particle query
+        origin = [float(x) for x in self.origin]
+        return (f"OifCell(cell_id={self.cell_id}, {self.mesh.get_n_nodes()} nodes, "
+                f"particle_type={self.particle_type}, origin={origin} (at creation))")
 
     # -- position and motion ---------------------------------------------------
     def get_origin(self):

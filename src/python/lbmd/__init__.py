@@ -39,6 +39,8 @@ from . import open_boundaries
 from . import vtk_output
 from . import units
 from . import checkpoint
+from . import io
+from . import progress
 from . import system as _system_module
 from .system import CellDriftWarning, System
 
@@ -75,5 +77,5 @@ if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
 __all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
-           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries", "units", "checkpoint",
+           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries", "units", "checkpoint", "io", "progress",
            "rank", "size", "comm"]

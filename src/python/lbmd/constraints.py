@@ -81,3 +81,6 @@ class Constraints:
 
     def __getitem__(self, i):
         return self._list[i]
+
+    def __repr__(self):
+        return f"Constraints({self._list!r})"

@@ -103,6 +103,14 @@ class NonBondedTypePair:
                                  f"{', '.join(NONBONDED_MODELS)}")
         return cls(self._system, *self._types)
 
+    def __dir__(self):
+        # the models, served by __getattr__, for tab completion
+        return sorted(set(super().__dir__()) | set(NONBONDED_MODELS))
+
+    def __repr__(self):
+        active = [name for name, cls in NONBONDED_MODELS.items() if cls(self._system, *self._types).is_active()]
+        return f"NonBondedTypePair({self._types[0]}, {self._types[1]}, active={active})"
+
 
 class NonBondedInteractions:
     """``system.non_bonded_inter[t1, t2]``."""
@@ -119,6 +127,9 @@ class NonBondedInteractions:
                 raise ValueError(f"non_bonded_inter: particle types must be integers in "
                                  f"0..{_lbmd.MAX_PARTICLE_TYPE}, got {t!r}")
         return NonBondedTypePair(self._system, int(key[0]), int(key[1]))
+
+    def __repr__(self):
+        return f"NonBondedInteractions(non_bonded_inter[t1, t2].<model>; models: {', '.join(NONBONDED_MODELS)})"
 
 
 # ---------------------------------------------------------------------------
@@ -280,3 +291,7 @@ class BondedInteractions:
 
     def __iter__(self):
         return iter(self._list)
+
+    def __repr__(self):
+        return f"BondedInteractions({len(self._list)} bonds: " + ", ".join(
+            f"{i}: {type(b).__name__}" for i, b in enumerate(self._list)) + ")"

@@ -96,3 +96,6 @@ class LBBoundaries:
 
     def __getitem__(self, i):
         return self._list[i]
+
+    def __repr__(self):
+        return f"LBBoundaries({self._list!r})"

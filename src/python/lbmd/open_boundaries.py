@@ -228,6 +228,9 @@ class OpenBoundaries:
     def __len__(self):
         return len(self._list)
 
+    def __repr__(self):
+        return f"OpenBoundaries({self._list!r})"
+
     def _apply(self):
         """Sends the faces to the C++ fluid, when it exists; an axis open on
         one face only waits for its other face (the check runs at the run's

@@ -97,6 +97,11 @@ class _ParticleView:
             raise AttributeError(f"particles have no property '{name}' "
                                  f"(settable: {', '.join(_VECTOR_PROPS + _SCALAR_PROPS + ('fix',))})")
 
+    def __dir__(self):
+        # the particle properties, served by __getattr__, for tab completion
+        return sorted(set(super().__dir__()) | set(_VECTOR_PROPS + _READONLY_VECTOR_PROPS + _SCALAR_PROPS)
+                      | {"fix", "id"})
+
     def remove(self):
         for pid in self._ids:
             self._core.remove_particle(int(pid))
@@ -167,6 +172,9 @@ class ParticleHandle(_ParticleView):
                                               "ext_force", "fix")}
 
     def __repr__(self):
+        from . import size
+        if size > 1:  # pos and type are collective queries: repr() may be called on one rank
+            return f"ParticleHandle(id={self.id})"
         return f"ParticleHandle(id={self.id}, pos={self.pos.tolist()}, type={self.type})"
 
     def __eq__(self, other):
@@ -193,7 +201,9 @@ class ParticleSlice(_ParticleView):
         return ParticleSlice(self._system, sel)
 
     def __repr__(self):
-        return f"ParticleSlice({len(self)} particles)"
+        ids = self._ids.tolist()
+        shown = ", ".join(map(str, ids[:6])) + (", ..." if len(ids) > 6 else "")
+        return f"ParticleSlice({len(self)} particles, ids [{shown}])"
 
 
 class ParticleList:

@@ -89,6 +89,9 @@ class CellSystem:
         """Number of Verlet-list rebuilds so far."""
         return self._system._core.n_rebuilds
 
+    def __repr__(self):
+        return f"CellSystem(skin={self.skin}, node_grid={self.node_grid}, balance={self.balance!r})"
+
 
 _TIMED_PHASES = (("membrane", "membrane: the cells' elastic moduli"),
                  ("bonded", "bonded: other bonds"),
@@ -104,11 +107,20 @@ class Integrator:
     def __init__(self, system):
         self._system = system
 
-    def run(self, steps=1, recalc_forces=False, reuse_forces=False):
-        """Integrate `steps` time steps (all in C++)."""
+    def run(self, steps=1, recalc_forces=False, reuse_forces=False, progress=False):
+        """Integrate `steps` time steps (all in C++). progress=True: in chunks
+        under a progress bar (simulated time, steps/s, time left) with a
+        summary line at the end, rank 0 only (lbmd.progress); the same
+        result bit for bit. Returns the summary line (progress=True) or None."""
         v = parse("integrator.run", [Param("steps", "int", check=non_negative),
-                                     Param("recalc_forces", "bool"), Param("reuse_forces", "bool")],
-                  {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces})
+                                     Param("recalc_forces", "bool"), Param("reuse_forces", "bool"),
+                                     Param("progress", "bool")],
+                  {"steps": steps, "recalc_forces": recalc_forces, "reuse_forces": reuse_forces,
+                   "progress": progress})
+        if v["progress"]:
+            self._system._check_ready()
+            from . import progress as _progress
+            return _progress.run(self, v["steps"], v["recalc_forces"], v["reuse_forces"])
         self._system._check_ready()
         fluid = self._system._lb_fluid()
         if fluid is not None and len(fluid.open_boundaries):
@@ -134,6 +146,11 @@ class Integrator:
 
     def set_vv(self):
         """Velocity Verlet (the only integrator; accepted for ESPResSo compatibility)."""
+
+    def __repr__(self):
+        s = self._system
+        return (f"Integrator(velocity Verlet, time_step={s.time_step if s._time_step_set else None}, "
+                f"step_count={s.step_count}, time={s.time:.6g})")
 
     #: the keys of ``timings()`` that divide its 'total' among the phases of
     #: a step (they add up to it)
@@ -249,6 +266,14 @@ class Thermostat:
             self._system._core.set_lb_coupling_off()
             self._lb = None
 
+    def __repr__(self):
+        state = self.get_state()
+        if not state:
+            return "Thermostat(off)"
+        return "Thermostat(" + ", ".join(
+            d["type"] + "(" + ", ".join(f"{k}={v}" for k, v in d.items() if k != "type") + ")"
+            for d in state) + ")"
+
     def get_state(self):
         out = []
         lang = self._system._core.langevin
@@ -299,12 +324,18 @@ class Actors:
     def __getitem__(self, i):
         return self._list[i]
 
+    def __repr__(self):
+        return f"Actors({self._list!r})"
+
 
 class Analysis:
     """``system.analysis``: energies, momentum, distances."""
 
     def __init__(self, system):
         self._system = system
+
+    def __repr__(self):
+        return "Analysis(energy(), linear_momentum(), min_dist(), center_of_mass())"
 
     def energy(self):
         """dict with 'total', 'kinetic', 'bonded', 'non_bonded' and

@@ -246,6 +246,10 @@ class ParameterObject:
         args = ", ".join(f"{k}={_fmt(v)}" for k, v in self._values.items())
         return f"{type(self).__name__}({args})"
 
+    def __dir__(self):
+        # the parameters, served by __getattr__, for tab completion
+        return sorted(set(super().__dir__()) | set(self.__dict__.get("_values", {})))
+
 
 def _fmt(v):
     if isinstance(v, np.ndarray):

@@ -119,6 +119,9 @@ class TimeSeries:
     rank calls ``write`` (the data are gathered collectively), rank 0 writes.
     Subclasses: FluidSeries here, oif.CellSeries."""
 
+    def __repr__(self):
+        return f"{type(self).__name__}('{self.pvd_path}', {len(self.steps)} step(s))"
+
     def _start_series(self, owner, path, default_stem):
         self._owner = owner
         self.pvd_path = check_path(owner, path, ".pvd", example=f"out/{default_stem}")
