@@ -71,7 +71,6 @@ import json
 import math
 import os
 import sys
-import time as wallclock
 
 import numpy as np
 
@@ -548,45 +547,12 @@ def record():
         fluid_series.write(system.time)
 
 
-class Progress:
-    """A tqdm bar (Debian's python3-tqdm: steps/s and time left) on a
-    terminal, else a line per output; rank 0 only."""
-
-    def __init__(self, mode, start=0):
-        if mode == "auto":
-            mode = "bar" if sys.stderr.isatty() else "lines"
-        self.mode = mode if rank0 else "off"
-        self.bar = None
-        self.started = self.said = wallclock.monotonic()
-        self.start = start
-        if self.mode == "bar":
-            try:
-                from tqdm import tqdm
-                self.bar = tqdm(total=total_steps, initial=start, unit="step", unit_scale=True, dynamic_ncols=True,
-                                bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} steps [{elapsed}<{remaining}, "
-                                           "{rate_fmt}] {postfix}")
-            except ImportError:
-                print("(no progress bar: Debian's python3-tqdm is not installed; a line per output instead)")
-                self.mode = "lines"
-
-    def update(self, done):
-        simulated = f"{to_ms(system.time - time0):.3f} ms of {to_ms(total_steps * time_step):g}"
-        lower = sum(v == "lower" for v in entered.values())
-        upper = sum(v == "upper" for v in entered.values())
-        if self.bar is not None:
-            self.bar.update(steps_per_output)
-            self.bar.set_postfix_str(f"{simulated}, entries lower {lower} upper {upper}", refresh=False)
-        elif self.mode == "lines" and (wallclock.monotonic() - self.said > 10.0 or done == total_steps):
-            self.said = wallclock.monotonic()  # a line every 10 s
-            elapsed = self.said - self.started
-            rate = (done - self.start) / elapsed if elapsed > 0 else 0.0
-            left = (total_steps - done) / rate if rate > 0 else 0.0
-            print(f"{simulated}  {rate:7.0f} steps/s  {left:6.0f} s left  branch entries: lower {lower}, "
-                  f"upper {upper}", flush=True)
-
-    def close(self):
-        if self.bar is not None:
-            self.bar.close()
+def progress_note():
+    """Beside the progress bar's steps, steps/s and time left: the simulated
+    time and the branch entries so far."""
+    lower = sum(v == "lower" for v in entered.values())
+    upper = sum(v == "upper" for v in entered.values())
+    return f"{to_ms(system.time - time0):.3f} ms of {to_ms(total_steps * time_step):g}, entries lower {lower} upper {upper}"
 
 
 # --- run
@@ -613,14 +579,14 @@ steps_per_checkpoint = (max(1, int(round(UNITS.to_lattice(every * 1e-3, "s") / t
 system.integrator.reset_timings()  # the report below covers the cells' run, not the calibration
 if resumed is None:
     record()
-progress = Progress(args.progress, start=outputs_done * steps_per_output)
+progress = lbmd.progress.Bar(total_steps, initial=outputs_done * steps_per_output, mode=args.progress)
 for i in range(outputs_done + 1, n_outputs + 1):
     # up to the output's step (a run resumed from a walltime checkpoint
     # does the rest of the interval the signal cut)
     system.integrator.run(release_step + i * steps_per_output - system.step_count)
     record()
     outputs_done = i
-    progress.update(i * steps_per_output)
+    progress.update(steps_per_output, postfix=progress_note())
     if steps_per_checkpoint and (i * steps_per_output) % steps_per_checkpoint == 0 and i < n_outputs:
         lbmd.checkpoint.save(checkpoint_path, system, **checkpoint_objects())
 progress.close()
