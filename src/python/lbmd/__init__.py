@@ -41,6 +41,7 @@ from . import units
 from . import checkpoint
 from . import system as _system_module
 from .system import CellDriftWarning, System
+from .old_names import OldNameWarning
 
 __version__ = "0.1.0"
 
@@ -74,6 +75,6 @@ def _abort_all_ranks(exc_type, exc, tb):
 if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
-__all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
+__all__ = ["System", "SimulationInstability", "CellDriftWarning", "OldNameWarning", "has_features", "assert_features", "features",
            "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries", "units", "checkpoint",
            "rank", "size", "comm"]

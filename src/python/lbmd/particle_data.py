@@ -1,5 +1,7 @@
 """Particles: ``system.part`` (add, by_id, by_ids, all, clear), handles to one
-particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API)."""
+particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API).
+ESPResSo 4.1's indexing, ``system.part[i]``, ``system.part[:]``,
+``system.part[2:10]`` and ``system.part[[1, 5]]``, works too (lbmd.old_names)."""
 
 import numpy as np
 
@@ -9,6 +11,7 @@ _SCALAR_PROPS = ("mass", "type", "mol_id")
 _ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
 
 
+from .old_names import warn_old_name
 from .validation import INT32_MAX, integers as _integers, is_whole_number
 
 
@@ -306,6 +309,27 @@ class ParticleList:
 
     def all(self):
         return ParticleSlice(self._system, self._core.all_ids())
+
+    def __getitem__(self, key):
+        """ESPResSo 4.1 indexing (warns once): ``part[i]`` is by_id(i);
+        ``part[start:stop:step]`` the existing particles among the ids
+        range(0, highest id + 1)[start:stop:step] (``part[:]`` is all());
+        ``part[[i, j, ...]]`` is by_ids([i, j, ...])."""
+        if isinstance(key, slice):
+            warn_old_name("system.part[start:stop]", "system.part.all() or system.part.by_ids()")
+            for name in ("start", "stop", "step"):
+                value = getattr(key, name)
+                if value is not None and not is_whole_number(value):
+                    raise TypeError(f"system.part[...]: slice {name} must be an integer, got {value!r}")
+            key = slice(*(None if v is None else int(v) for v in (key.start, key.stop, key.step)))
+            ids = np.arange(self._core.max_id() + 1)[key]
+            all_ids = np.asarray(self._core.all_ids())
+            return ParticleSlice(self._system, ids[np.isin(ids, all_ids)])
+        if np.ndim(key) == 0 and not isinstance(key, (str, bytes)):
+            warn_old_name("system.part[id]", "system.part.by_id(id)")
+            return self.by_id(key)
+        warn_old_name("system.part[ids]", "system.part.by_ids(ids)")
+        return self.by_ids(key)
 
     def select(self, **conditions):
         """Particles whose properties equal the given values, e.g. select(type=1)."""
