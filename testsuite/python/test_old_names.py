@@ -1,6 +1,7 @@
 """ESPResSo <= 4.1 names and ESPResSo 4.2 package-level helpers that ported
 PyOIF scripts use (doc/porting.md): LBFluid.print_vtk_velocity and
-print_vtk_boundary, system.part[...] indexing, oif.norm & co., and
+print_vtk_boundary, system.part[...] indexing, system.part.writevtk,
+oif.norm & co., and
 elastic_forces on a cell whose triangle list the script cut."""
 import os
 import tempfile
@@ -89,6 +90,40 @@ class OldNames(unittest.TestCase):
             s.part[0.5:3]
         s.part.clear()
         self.assertEqual(len(s.part[:]), 0)
+
+    def test_particle_writevtk(self):
+        """ESPResSo's system.part.writevtk (4.1 and 4.2): folded positions of
+        the chosen types and their velocities."""
+        s = lbmd.System(box_l=[10.0, 10.0, 10.0])
+        s.part.add(pos=[[1, 2, 3], [12, 2, 3], [4, 5, 6]], v=[[1, 0, 0], [0, 2, 0], [0, 0, 3]], type=[0, 1, 2])
+
+        def read(path):
+            with open(path) as f:
+                lines = f.read().splitlines()
+            i = lines.index(next(ln for ln in lines if ln.startswith("POINTS")))
+            n = int(lines[i].split()[1])
+            pos = np.array([[float(x) for x in ln.split()] for ln in lines[i + 1:i + 1 + n]]).reshape(-1, 3)
+            j = lines.index("VECTORS velocity double")
+            vel = np.array([[float(x) for x in ln.split()] for ln in lines[j + 1:j + 1 + n]]).reshape(-1, 3)
+            self.assertIn(f"VERTICES {n} {2 * n}", lines)
+            return pos, vel
+
+        s.part.writevtk(self.path("all.vtk"))
+        pos, vel = read(self.path("all.vtk"))
+        np.testing.assert_array_equal(pos, [[1, 2, 3], [2, 2, 3], [4, 5, 6]])  # folded
+        np.testing.assert_array_equal(vel, [[1, 0, 0], [0, 2, 0], [0, 0, 3]])
+        s.part.writevtk(self.path("some.vtk"), types=[0, 2])
+        np.testing.assert_array_equal(read(self.path("some.vtk"))[1], [[1, 0, 0], [0, 0, 3]])
+        s.part.writevtk(self.path("one.vtk"), types=1)
+        np.testing.assert_array_equal(read(self.path("one.vtk"))[0], [[2, 2, 3]])
+        s.part.writevtk(self.path("none.vtk"), types=[7])
+        self.assertEqual(len(read(self.path("none.vtk"))[0]), 0)
+        with self.assertRaisesRegex(ValueError, "'types'"):
+            s.part.writevtk(self.path("x.vtk"), types="some")
+        with self.assertRaisesRegex(ValueError, "types"):
+            s.part.writevtk(self.path("x.vtk"), types=[-1])
+        with self.assertRaisesRegex(TypeError, "'fname'"):
+            s.part.writevtk(None)
 
     def test_oif_package_level_helpers(self):
         for name in ESPRESSO_422_EXPORTS:

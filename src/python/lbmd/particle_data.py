@@ -3,6 +3,8 @@ particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API).
 ESPResSo 4.1's indexing, ``system.part[i]``, ``system.part[:]``,
 ``system.part[2:10]`` and ``system.part[[1, 5]]``, works too (lbmd.old_names)."""
 
+import os
+
 import numpy as np
 
 _VECTOR_PROPS = ("pos", "v", "f", "ext_force")
@@ -359,6 +361,35 @@ class ParticleList:
     def __iter__(self):
         """Handles of all particles, by increasing id (ESPResSo: ``for p in system.part``)."""
         return iter(self.all())
+
+    def writevtk(self, fname, types="all"):
+        """ESPResSo's ``system.part.writevtk``: a legacy ASCII VTK file of the
+        folded positions of the particles of the given types ('all', one
+        type or a list of types), as vertices, with their velocities as point
+        data 'velocity'. Written once under MPI (every rank calls)."""
+        from .file_output import _is_writer, write_text
+        owner = "system.part.writevtk"
+        if not isinstance(fname, (str, os.PathLike)) or isinstance(fname, bytes):
+            raise TypeError(f"{owner}: parameter 'fname' must be a file name, got {fname!r}")
+        sl = self.all()
+        if isinstance(types, str):
+            if types != "all":
+                raise ValueError(f"{owner}: parameter 'types' must be 'all', a type or a list of types, "
+                                 f"got {types!r}")
+            sel = sl
+        else:
+            wanted = _integers(owner, "types", np.atleast_1d(types) if np.ndim(types) == 0 else types, 0, INT32_MAX)
+            sel = ParticleSlice(self._system, sl._ids[np.isin(sl.type, wanted)])
+        pos, vel = sel.pos_folded.reshape(-1, 3), sel.v.reshape(-1, 3)
+        n = len(pos)
+        text = ""
+        if _is_writer():
+            rows = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in pos.tolist())
+            verts = "".join(f"1 {i}\n" for i in range(n))
+            vels = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in vel.tolist())
+            text = (f"# vtk DataFile Version 3.0\nparticles\nASCII\nDATASET POLYDATA\nPOINTS {n} double\n{rows}"
+                    f"VERTICES {n} {2 * n}\n{verts}POINT_DATA {n}\nVECTORS velocity double\n{vels}")
+        write_text(fname, text, owner)
 
     def add_bonds(self, bond, ids, per_bond=None):
         """Bulk bonds: ids is an M×k array of particle ids, one row per bond
