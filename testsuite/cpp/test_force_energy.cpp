@@ -18,6 +18,7 @@
 
 #include "interactions/bonded/harmonic.hpp"
 #include "interactions/nonbonded/membrane_collision.hpp"
+#include "interactions/nonbonded/morse.hpp"
 #include "interactions/nonbonded/soft_sphere.hpp"
 
 #include <gtest/gtest.h>
@@ -251,6 +252,9 @@ std::vector<Case> cases() {
   plain.mol_j = 1;
   out.push_back(
       pair_case<SoftSphere>("soft_sphere", {0.3, 2.5, 1.2, 0.1}, plain, pair_at(0.3, 1.25)));
+  // Morse on both sides of its minimum (rmin = 1), up to just below the cutoff
+  out.push_back(
+      pair_case<Morse>("morse", Morse::make(1.3, 2.0, 1.0, 2.2), plain, pair_at(0.5, 2.1)));
   PairContext facing = plain;
   facing.normal_i = Vec3(0.3, 0.9, -0.2).normalized();
   facing.normal_j = Vec3(-0.5, -0.7, 0.4).normalized();

@@ -5,7 +5,9 @@ and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
 - ``oif.OifCellType`` / ``oif.OifCell``: cell templates and cells,
 - ``oif.Mesh`` and the views FixedPoint, PartPoint, Edge, Triangle, Angle,
   ThreeNeighbors,
-- ``oif.oif_utils``: PyOIF's helper functions and VTK output of shapes,
+- ``oif.oif_utils``: PyOIF's helper functions and VTK output of shapes (the
+  ones ESPResSo 4.2 exports at package level, ``oif.norm``,
+  ``oif.vec_distance``, ..., are here too),
 - ``oif.mesh_files(name)``: the shipped meshes (spheres and Evans-Fung
   red blood cells, see ``oif/meshes/README.md``),
 - ``oif.seed_cells``: random non-overlapping placement of many cells,
@@ -21,8 +23,13 @@ import os as _os
 from .oif_classes import (FixedPoint, PartPoint, Edge, Triangle, Angle, ThreeNeighbors, Mesh,  # noqa: F401
                           OifCellType, OifCell, OverlapWarning)
 from . import oif_utils  # noqa: F401
-from .oif_utils import (output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore,  # noqa: F401
-                        output_vtk_lines)
+# the helpers ESPResSo 4.2's object_in_fluid exports at package level
+from .oif_utils import (custom_str, get_triangle_normal, norm, vec_distance, area_triangle,  # noqa: F401
+                        angle_btw_triangles, discard_epsilon, oif_neo_hookean_nonlin,
+                        oif_calc_stretching_force, oif_calc_linear_stretching_force,
+                        oif_calc_bending_force, oif_calc_local_area_force,
+                        oif_calc_global_area_force, oif_calc_volume_force,
+                        output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore, output_vtk_lines)
 from .seeding import seed_cells, SeedingError  # noqa: F401
 from .flow_through import CellFlow  # noqa: F401
 from . import stretching  # noqa: F401
@@ -47,5 +54,8 @@ def mesh_files(name):
 
 
 __all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbors", "Mesh", "OifCellType", "OverlapWarning",
-           "OifCell", "oif_utils", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
+           "OifCell", "oif_utils", "custom_str", "get_triangle_normal", "norm", "vec_distance", "area_triangle",
+           "angle_btw_triangles", "discard_epsilon", "oif_neo_hookean_nonlin", "oif_calc_stretching_force",
+           "oif_calc_linear_stretching_force", "oif_calc_bending_force", "oif_calc_local_area_force",
+           "oif_calc_global_area_force", "oif_calc_volume_force", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
            "output_vtk_lines", "seed_cells", "SeedingError", "CellFlow", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

@@ -621,7 +621,16 @@ class Mesh:
         return geo.surface(self.positions(), self._analysis_triangles())
 
     def volume(self):
-        return geo.volume(self.positions(), self._analysis_triangles())
+        """Enclosed volume. For a triangle list replaced by the script (an open
+        surface, whose volume is a convention) PyOIF's formula: minus the sum
+        of the triangles' z-projected areas times their mean z."""
+        if getattr(self, "_triangle_override", None) is None:
+            return geo.volume(self.positions(), self._analysis_triangles())
+        pos = self.positions()
+        tri = pos[self._triangle_override]
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        # area * n_z / |n| = |n| / 2 * n_z / |n| = n_z / 2
+        return float(0.0 - np.sum(0.5 * n[:, 2] * tri[:, :, 2].mean(axis=1)))
 
     def _edge_lengths(self):
         if len(self.edge_ids) == 0:
@@ -1276,6 +1285,76 @@ class OifCell:
         out["total"] = sum(out[t] for t in OifCellType.ENERGY_TERMS)
         return out
 
+    def _view_force_arrays(self):
+        """As elastic_force_arrays, computed the way ESPResSo 4.2's
+        ``OifCell.elastic_forces`` does, from the mesh's current lists: every
+        edge (stretching: neo-Hookean ks and linear kslin) and angle
+        (bending) of the cell, and only the triangles in ``mesh.triangles``
+        (local area; global area and volume with the surface and volume of
+        those triangles against the cell type's whole reference surface and
+        volume). Used when a script has replaced ``mesh.triangles``; the
+        formulas are those of oif_utils (PyOIF's helpers, e.g. the global area
+        force without the 1/A0_g of the engine)."""
+        ct = self.cell_type
+        mesh = self.mesh
+        pos = mesh.positions()
+        ref = ct.mesh.positions()
+        n = len(pos)
+        out = {}
+        # stretching, over the edges
+        e = mesh.edge_ids
+        d = pos[e[:, 1]] - pos[e[:, 0]]
+        dist = np.linalg.norm(d, axis=1)
+        dist0 = np.linalg.norm(ref[e[:, 1]] - ref[e[:, 0]], axis=1)
+        lam = dist / dist0
+        fac = (ct.ks * (lam ** 0.5 + lam ** -2.5) / (lam + lam ** -3.0) + ct.kslin) * (dist - dist0) / dist
+        f = fac[:, None] * d
+        acc = np.zeros((n, 3))
+        np.add.at(acc, e[:, 0], f)
+        np.add.at(acc, e[:, 1], -f)
+        out["stretching"] = acc
+        # bending, over the angles (A, B, C, D), shared edge BC
+        a = mesh.angle_ids
+        acc = np.zeros((n, 3))
+        if len(a):
+            phi = geo.dihedral_angles(pos, a)
+            phi0 = geo.dihedral_angles(ref, a)
+            pa, pb, pc, pd = (pos[a[:, k]] for k in range(4))
+            n1 = np.cross(pa - pb, pc - pb)
+            n2 = np.cross(pc - pb, pd - pb)
+            fac = ct.kb * (phi - phi0) / phi0
+            f1 = fac[:, None] * n1 / np.linalg.norm(n1, axis=1)[:, None]
+            f2 = fac[:, None] * n2 / np.linalg.norm(n2, axis=1)[:, None]
+            np.add.at(acc, a[:, 0], f1)
+            np.add.at(acc, a[:, 1], -0.5 * (f1 + f2))
+            np.add.at(acc, a[:, 2], -0.5 * (f1 + f2))
+            np.add.at(acc, a[:, 3], f2)
+        out["bending"] = acc
+        # local area, global area and volume, over the listed triangles
+        t = mesh._analysis_triangles()
+        tri = pos[t]
+        normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        area = 0.5 * np.linalg.norm(normals, axis=1)
+        area0 = 0.5 * np.linalg.norm(np.cross(ref[t[:, 1]] - ref[t[:, 0]], ref[t[:, 2]] - ref[t[:, 0]]), axis=1)
+        to_centroid = tri.mean(axis=1)[:, None, :] - tri
+        spread = np.sum(to_centroid ** 2, axis=(1, 2))
+
+        def per_corner(fac):
+            acc = np.zeros((n, 3))
+            for k in range(3):
+                np.add.at(acc, t[:, k], fac[:, None] * to_centroid[:, k])
+            return acc
+        out["local_area"] = per_corner(ct.kal * (area - area0) / spread)
+        out["global_area"] = per_corner(ct.kag * area * (mesh.surface() - ct.mesh.surface()) / spread)
+        v0 = ct.mesh.volume()
+        fv = (ct.kv * (mesh.volume() - v0) / v0 * area / 3.0)[:, None] * normals / (2.0 * area[:, None])
+        acc = np.zeros((n, 3))
+        for k in range(3):
+            np.add.at(acc, t[:, k], fv)
+        out["volume"] = acc
+        out["total"] = sum(out[term] for term in OifCellType.ENERGY_TERMS)
+        return out
+
     def get_energies(self):
         """dict term -> this cell's elastic energy at the current positions
         (simulation units) for 'stretching' (eq. 3's neo-Hookean and linear
@@ -1296,7 +1375,9 @@ class OifCell:
         kag, kv, total): el_forces selects per-node force magnitudes to write
         into vtk_file (as point data) or one force to write as raw x y z rows
         into raw_data_file; f_metric selects sums over nodes of ``|F|``, returned
-        as a list of 6 (0 if none selected)."""
+        as a list of 6 (0 if none selected). The forces are the engine's; if
+        the script replaced ``mesh.triangles``, they are those of the current
+        lists as ESPResSo 4.2 computes them (see _view_force_arrays)."""
         for name, flags in (("el_forces", el_forces), ("f_metric", f_metric)):
             if isinstance(flags, (str, bytes)) or not isinstance(flags, (list, tuple, np.ndarray)):
                 raise TypeError(f"OifCell.elastic_forces: '{name}' must be a list of 6 flags (0 or 1) in "
@@ -1312,7 +1393,11 @@ class OifCell:
                              "in el_forces")
         if sum(el_forces) == 0 and sum(f_metric) == 0:
             return 0
-        forces = self.elastic_force_arrays()
+        # a script that replaced mesh.triangles analyses those triangles (ESPResSo's way)
+        if getattr(self.mesh, "_triangle_override", None) is not None:
+            forces = self._view_force_arrays()
+        else:
+            forces = self.elastic_force_arrays()
         if vtk_file is not None:
             labels = ("ks_f_metric", "kb_f_metric", "kal_f_metric", "kag_f_metric", "kav_f_metric",
                       "total_f_metric")

@@ -43,6 +43,7 @@ from . import io
 from . import progress
 from . import system as _system_module
 from .system import CellDriftWarning, System
+from .old_names import OldNameWarning
 
 __version__ = "0.1.0"
 
@@ -76,6 +77,7 @@ def _abort_all_ranks(exc_type, exc, tb):
 if size > 1 and not sys.flags.interactive:
     sys.excepthook = _abort_all_ranks
 
-__all__ = ["System", "SimulationInstability", "CellDriftWarning", "has_features", "assert_features", "features",
-           "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries", "units", "checkpoint", "io", "progress",
+__all__ = ["System", "SimulationInstability", "CellDriftWarning", "OldNameWarning", "has_features", "assert_features",
+           "features", "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries",
+           "units", "checkpoint", "io", "progress",
            "rank", "size", "comm"]

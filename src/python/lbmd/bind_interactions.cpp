@@ -65,6 +65,17 @@ void bind_interactions(py::module_& m) {
       .def_readonly("offset", &MembraneCollision::Params::offset);
   bind_pair_model<MembraneCollision>(sys);
 
+  // the energy shift (U(cutoff) = 0) is derived, not a parameter
+  py::class_<Morse::Params>(m, "MorseParams")
+      .def(py::init(&Morse::make), py::arg("eps"), py::arg("alpha"), py::arg("rmin"),
+           py::arg("cutoff"))
+      .def_readonly("eps", &Morse::Params::eps)
+      .def_readonly("alpha", &Morse::Params::alpha)
+      .def_readonly("rmin", &Morse::Params::rmin)
+      .def_readonly("cutoff", &Morse::Params::cutoff)
+      .def_readonly("shift", &Morse::Params::shift);
+  bind_pair_model<Morse>(sys);
+
   // ---- bonded interactions --------------------------------------------------
   py::class_<HarmonicBond>(m, "HarmonicBond")
       .def(py::init([](double k, double r_0, double r_cut) {

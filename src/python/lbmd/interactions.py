@@ -81,9 +81,25 @@ class MembraneCollisionInteraction(NonBondedModel):
     _core_params = staticmethod(_lbmd.MembraneCollisionParams)
 
 
+class MorseInteraction(NonBondedModel):
+    """Morse potential with ESPResSo's semantics (ESPResSo 4.2 user guide,
+    "Morse interaction"): for r < cutoff
+    U(r) = eps (exp(-2 alpha (r - rmin)) - 2 exp(-alpha (r - rmin))) - shift,
+    the shift making U(cutoff) = 0; zero beyond. As in ESPResSo, ``cutoff``
+    defaults to 0, which leaves the pair without interaction."""
+
+    name = "morse"
+    _params = [Param("eps", "float", check=non_negative, doc="depth of the minimum"),
+               Param("alpha", "float", check=positive, doc="stiffness (1/length)"),
+               Param("rmin", "float", check=non_negative, doc="distance of the minimum"),
+               Param("cutoff", "float", 0.0, check=non_negative, doc="range")]
+    _core_params = staticmethod(_lbmd.MorseParams)
+
+
 #: name -> class of every non-bonded model, as attributes of a type pair
 NONBONDED_MODELS = {SoftSphereInteraction.name: SoftSphereInteraction,
-                    MembraneCollisionInteraction.name: MembraneCollisionInteraction}
+                    MembraneCollisionInteraction.name: MembraneCollisionInteraction,
+                    MorseInteraction.name: MorseInteraction}
 
 
 def register_nonbonded_model(cls):

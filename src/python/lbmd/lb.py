@@ -12,6 +12,7 @@ import numbers
 import numpy as np
 
 from . import _lbmd
+from .old_names import warn_old_name
 from .validation import Param, ParameterObject, non_negative, positive
 
 _COLLISIONS = ("MRT", "MRT_ESPRESSO", "TRT", "BGK")
@@ -150,6 +151,23 @@ class LBFluid(ParameterObject):
     def write_vtk_boundary(self, path):
         """Legacy VTK structured points of the boundary flags (0 fluid, b + 1 boundary b)."""
         self._checked_core().write_vtk_boundary(_path(path))
+
+    # --- ESPResSo <= 4.1 names (lbmd.old_names) ------------------------------
+    def print_vtk_velocity(self, path, bb1=None, bb2=None):
+        """ESPResSo <= 4.1 name of write_vtk_velocity (warns once). The
+        sub-box ``bb1``, ``bb2`` of ESPResSo is not supported: the whole
+        lattice is written."""
+        warn_old_name("LBFluid.print_vtk_velocity", "LBFluid.write_vtk_velocity")
+        for name, value in (("bb1", bb1), ("bb2", bb2)):
+            if value is not None:
+                raise ValueError(f"LBFluid.print_vtk_velocity: parameter '{name}' (a sub-box) is not "
+                                 "supported: the whole lattice is written; leave bb1 and bb2 out")
+        self.write_vtk_velocity(path)
+
+    def print_vtk_boundary(self, path):
+        """ESPResSo <= 4.1 name of write_vtk_boundary (warns once)."""
+        warn_old_name("LBFluid.print_vtk_boundary", "LBFluid.write_vtk_boundary")
+        self.write_vtk_boundary(path)
 
     def __getitem__(self, key):
         return LBFluidRoutines(self, key)

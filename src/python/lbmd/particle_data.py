@@ -1,5 +1,9 @@
 """Particles: ``system.part`` (add, by_id, by_ids, all, clear), handles to one
-particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API)."""
+particle and slices of many, with numpy-valued properties (ESPResSo 4.2 API).
+ESPResSo 4.1's indexing, ``system.part[i]``, ``system.part[:]``,
+``system.part[2:10]`` and ``system.part[[1, 5]]``, works too (lbmd.old_names)."""
+
+import os
 
 import numpy as np
 
@@ -9,6 +13,7 @@ _SCALAR_PROPS = ("mass", "type", "mol_id")
 _ADD_KEYS = ("id", "pos", "v", "mass", "type", "mol_id", "ext_force", "fix")
 
 
+from .old_names import warn_old_name
 from .validation import INT32_MAX, integers as _integers, is_whole_number
 
 
@@ -317,6 +322,27 @@ class ParticleList:
     def all(self):
         return ParticleSlice(self._system, self._core.all_ids())
 
+    def __getitem__(self, key):
+        """ESPResSo 4.1 indexing (warns once): ``part[i]`` is by_id(i);
+        ``part[start:stop:step]`` the existing particles among the ids
+        range(0, highest id + 1)[start:stop:step] (``part[:]`` is all());
+        ``part[[i, j, ...]]`` is by_ids([i, j, ...])."""
+        if isinstance(key, slice):
+            warn_old_name("system.part[start:stop]", "system.part.all() or system.part.by_ids()")
+            for name in ("start", "stop", "step"):
+                value = getattr(key, name)
+                if value is not None and not is_whole_number(value):
+                    raise TypeError(f"system.part[...]: slice {name} must be an integer, got {value!r}")
+            key = slice(*(None if v is None else int(v) for v in (key.start, key.stop, key.step)))
+            ids = np.arange(self._core.max_id() + 1)[key]
+            all_ids = np.asarray(self._core.all_ids())
+            return ParticleSlice(self._system, ids[np.isin(ids, all_ids)])
+        if np.ndim(key) == 0 and not isinstance(key, (str, bytes)):
+            warn_old_name("system.part[id]", "system.part.by_id(id)")
+            return self.by_id(key)
+        warn_old_name("system.part[ids]", "system.part.by_ids(ids)")
+        return self.by_ids(key)
+
     def select(self, **conditions):
         """Particles whose properties equal the given values, e.g. select(type=1)."""
         sl = self.all()
@@ -345,6 +371,35 @@ class ParticleList:
     def __iter__(self):
         """Handles of all particles, by increasing id (ESPResSo: ``for p in system.part``)."""
         return iter(self.all())
+
+    def writevtk(self, fname, types="all"):
+        """ESPResSo's ``system.part.writevtk``: a legacy ASCII VTK file of the
+        folded positions of the particles of the given types ('all', one
+        type or a list of types), as vertices, with their velocities as point
+        data 'velocity'. Written once under MPI (every rank calls)."""
+        from .file_output import _is_writer, write_text
+        owner = "system.part.writevtk"
+        if not isinstance(fname, (str, os.PathLike)) or isinstance(fname, bytes):
+            raise TypeError(f"{owner}: parameter 'fname' must be a file name, got {fname!r}")
+        sl = self.all()
+        if isinstance(types, str):
+            if types != "all":
+                raise ValueError(f"{owner}: parameter 'types' must be 'all', a type or a list of types, "
+                                 f"got {types!r}")
+            sel = sl
+        else:
+            wanted = _integers(owner, "types", np.atleast_1d(types) if np.ndim(types) == 0 else types, 0, INT32_MAX)
+            sel = ParticleSlice(self._system, sl._ids[np.isin(sl.type, wanted)])
+        pos, vel = sel.pos_folded.reshape(-1, 3), sel.v.reshape(-1, 3)
+        n = len(pos)
+        text = ""
+        if _is_writer():
+            rows = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in pos.tolist())
+            verts = "".join(f"1 {i}\n" for i in range(n))
+            vels = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in vel.tolist())
+            text = (f"# vtk DataFile Version 3.0\nparticles\nASCII\nDATASET POLYDATA\nPOINTS {n} double\n{rows}"
+                    f"VERTICES {n} {2 * n}\n{verts}POINT_DATA {n}\nVECTORS velocity double\n{vels}")
+        write_text(fname, text, owner)
 
     def add_bonds(self, bond, ids, per_bond=None):
         """Bulk bonds: ids is an M×k array of particle ids, one row per bond

@@ -5,12 +5,13 @@
 #pragma once
 
 #include "interactions/nonbonded/membrane_collision.hpp"
+#include "interactions/nonbonded/morse.hpp"
 #include "interactions/nonbonded/soft_sphere.hpp"
 
 #include <tuple>
 
 namespace pyoif {
 
-using NonbondedModels = std::tuple<SoftSphere, MembraneCollision>;
+using NonbondedModels = std::tuple<SoftSphere, MembraneCollision, Morse>;
 
 } // namespace pyoif
