@@ -12,6 +12,7 @@ packages=(
   python3 python3-dev python3-numpy python3-mpi4py python3-h5py
   python3-vtk9 python3-matplotlib python3-meshio python3-pybind11 python3-scipy python3-tqdm
   python3-ezdxf python3-svgelements python3-pil
+  ipython3 python3-ipykernel jupyter-notebook python3-nbclient python3-nbformat python3-nbconvert xvfb
 )
 
 missing=()
