@@ -42,6 +42,8 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 _NAMES = "xyz"
 # node colours of the boundaries (index b of system.lbboundaries: colour b mod 10)
 _BOUNDARY_CMAP = "tab10"
+# cells without color_by: a colour per cell type (seen on white and on viridis)
+_TYPE_COLOURS = ("#d62728", "#ff7f0e", "#e377c2", "#17becf", "#8c564b")
 
 
 # --- arguments ----------------------------------------------------------------
@@ -325,7 +327,8 @@ def fluid(system, axis="z", position=None, *, component="magnitude", arrows="str
         every = max(1, int(round(max(values.shape) / 40)))
         sel = (slice(None, None, every), slice(None, None, every))
         HH, VV = np.meshgrid(h_nodes, v_nodes)
-        ax.quiver(HH[sel], VV[sel], uh[sel], uv_[sel], color="w", scale_units="xy", angles="xy")
+        keep = fluid_nodes.T[sel]  # no arrows (dots) on the boundary nodes
+        ax.quiver(HH[sel][keep], VV[sel][keep], uh[sel][keep], uv_[sel][keep], color="w", angles="xy")
     ax.set_xlim(0, values.shape[0] * agrid * scale)
     ax.set_ylim(0, values.shape[1] * agrid * scale)
     _label_axes(ax, axis, units, f"fluid {name}, plane {_NAMES[axis]} = {_length_text(coordinate, units)}, "
@@ -481,14 +484,14 @@ def cells(system, cells, axis="z", position=None, *, mode="slice", color_by=None
         if values is not None:
             colour = colormap(norm(values[k]))
         else:
-            colour = type_colours.setdefault(id(c.cell_type), f"C{len(type_colours) % 10}")
+            colour = type_colours.setdefault(id(c.cell_type), _TYPE_COLOURS[len(type_colours) % len(_TYPE_COLOURS)])
         if mode == "slice":
             seg = _cut(pos, tri, axis, coordinate, h, v)
             if len(seg) == 0:
                 continue
             flat = seg.reshape(-1, 2)
             parts = [seg + np.array(s) for s in _images(system, flat, h, v)]
-            art = LineCollection(np.concatenate(parts) * scale, colors=[colour], linewidths=1.2,
+            art = LineCollection(np.concatenate(parts) * scale, colors=[colour], linewidths=1.5,
                                  label=f"cell {c.cell_id}")
             ax.add_collection(art)
             centre = flat.mean(axis=0)
