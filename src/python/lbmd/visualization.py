@@ -747,6 +747,9 @@ def snapshot_3d(system, cells=(), path="snapshot.png", *, color_by=None, walls=T
     writer.SetInputConnection(grab.GetOutputPort())
     writer.Write()
     window.Finalize()
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp.name, 0o666 & ~mask)  # a temporary file is private; the picture is not
     os.replace(tmp.name, path)
     return path
 
