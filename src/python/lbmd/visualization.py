@@ -157,12 +157,20 @@ def _save(owner, fig, save):
         return
     if not isinstance(save, (str, os.PathLike)) or not os.fspath(save):
         raise TypeError(f"{owner}: parameter 'save' must be a file name (str or path) or None, got {save!r}")
-    from . import rank
+    from . import comm, rank
+    error = None
     if rank == 0:
         folder = os.path.dirname(os.path.abspath(os.fspath(save)))
-        if not os.path.isdir(folder):
-            raise OSError(f"{owner}: cannot write {os.fspath(save)!r}: folder {folder!r} does not exist")
-        fig.savefig(save, dpi=fig.dpi)
+        try:
+            if not os.path.isdir(folder):
+                raise OSError(f"{owner}: cannot write {os.fspath(save)!r}: folder {folder!r} does not exist")
+            fig.savefig(save, dpi=fig.dpi)
+        except (OSError, ValueError) as e:  # (ValueError: a suffix matplotlib does not know)
+            error = (type(e), str(e))
+    if comm.Get_size() > 1:  # the same error on every rank
+        error = comm.bcast(error, root=0)
+    if error is not None:
+        raise error[0](error[1])
 
 
 def _extent(system, axis, fluid, scale):
@@ -625,14 +633,14 @@ def check_3d():
                            "DISPLAY to a working X server or unset it with Debian's xvfb installed")
 
 
-def _cells_polydata(vtk, system, cell_list, values):
+def _cells_polydata(vtk, system, cell_list, positions, values):
     points = vtk.vtkPoints()
     polys = vtk.vtkCellArray()
     scalars = vtk.vtkDoubleArray()
     scalars.SetName("value")
     offset = 0
     for k, c in enumerate(cell_list):
-        pos = _folded(system, np.asarray(c.mesh.positions(), dtype=float))
+        pos = _folded(system, positions[k])
         for p in pos:
             points.InsertNextPoint(*p)
             scalars.InsertNextValue(values[k])
@@ -670,20 +678,35 @@ def snapshot_3d(system, cells=(), path="snapshot.png", *, color_by=None, walls=T
             from None
     values = (np.zeros(len(cell_list)), None) if color_by is None else cell_values(cell_list, color_by, units)
     fl = system._lb_fluid() if walls else None
-    flags = fl[:, :, :].boundary if fl is not None else None  # collective: before rank 0 goes alone
-    from . import rank
+    # the collective queries, on every rank, before rank 0 draws alone
+    flags = fl[:, :, :].boundary if fl is not None else None
+    positions = [np.asarray(c.mesh.positions(), dtype=float) for c in cell_list]
+    # rank 0 alone checks and draws; its error, if any, is raised on every rank
+    from . import comm, rank
+    error = None
     if rank == 0:
-        folder = os.path.dirname(os.path.abspath(path))
-        if not os.path.isdir(folder):
-            raise OSError(f"{owner}: cannot write {path!r}: folder {folder!r} does not exist")
-    check_3d()
-    if rank != 0:
-        return path
+        try:
+            folder = os.path.dirname(os.path.abspath(path))
+            if not os.path.isdir(folder):
+                raise OSError(f"{owner}: cannot write {path!r}: folder {folder!r} does not exist")
+            check_3d()
+            _render(system, cell_list, positions, flags, fl, values, color_by, path, width, height, azimuth,
+                    elevation)
+        except (OSError, RuntimeError) as e:
+            error = (type(e), str(e))
+    if comm.Get_size() > 1:
+        error = comm.bcast(error, root=0)
+    if error is not None:
+        raise error[0](error[1])
+    return path
+
+
+def _render(system, cell_list, positions, flags, fl, values, color_by, path, width, height, azimuth, elevation):
     import vtk
     renderer = vtk.vtkRenderer()
     renderer.SetBackground(1.0, 1.0, 1.0)
     if cell_list:
-        data = _cells_polydata(vtk, system, cell_list, values[0])
+        data = _cells_polydata(vtk, system, cell_list, positions, values[0])
         mapper = vtk.vtkPolyDataMapper()
         mapper.SetInputData(data)
         actor = vtk.vtkActor()
@@ -751,7 +774,6 @@ def snapshot_3d(system, cells=(), path="snapshot.png", *, color_by=None, walls=T
     os.umask(mask)
     os.chmod(tmp.name, 0o666 & ~mask)  # a temporary file is private; the picture is not
     os.replace(tmp.name, path)
-    return path
 
 
 # --- live view --------------------------------------------------------------------------
