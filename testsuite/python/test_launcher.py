@@ -35,6 +35,8 @@ class Launcher(unittest.TestCase):
         self.assertIn("--gdb", out.stdout)
         self.assertIn("--valgrind", out.stdout)
         self.assertIn("--all-ranks", out.stdout)
+        for mode in ("--ipython", "notebook", "lab", "--install-kernel"):
+            self.assertIn(mode, out.stdout)
         self.assertIn("only rank\n0's stdout is shown", out.stdout)  # the help's last line is printed
 
     def test_rank_from_each_mpi_launcher(self):
@@ -87,6 +89,13 @@ class Launcher(unittest.TestCase):
                              "print('IPY', IPython.get_ipython() is not None, lbmd.size)")
         self.assertEqual(out.returncode, 0, out.stderr)
         self.assertIn("IPY True 1", out.stdout)
+
+    def test_notebook_starts(self):
+        """`pyoif notebook` runs Debian's Jupyter notebook (here only its
+        version: a server would wait for a browser)."""
+        out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "notebook", "--version")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertRegex(out.stdout.strip(), r"^\d+\.\d+")
 
     def test_lab_or_notebook_message(self):
         """`pyoif lab` without Jupyter Lab says so (Debian 12 has none)."""
