@@ -22,12 +22,13 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.quiver import Quiver
 
 matplotlib.use("Agg")
-warnings.simplefilter("ignore", SettingsWarning)  # a small, coarse test scene
 BOX = [20.0, 10.0, 8.0]
 CENTRES = [[5.0, 5.0, 4.0], [14.0, 3.5, 4.0], [14.0, 6.5, 4.0]]  # two of them side by side at x = 14
 
 
 def scene(with_cells=True):
+    # a small, coarse test scene (here, not at import: unittest's runner resets the filters)
+    warnings.simplefilter("ignore", SettingsWarning)
     system = lbmd.System(box_l=BOX)
     system.time_step = 0.05
     system.cell_system.skin = 0.2
