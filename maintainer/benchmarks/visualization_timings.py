@@ -17,7 +17,6 @@ import sys
 import tempfile
 import time
 
-import lbmd
 from lbmd import visualization as vis
 
 here = os.path.dirname(os.path.abspath(__file__))
