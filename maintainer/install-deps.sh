@@ -13,6 +13,7 @@ packages=(
   python3-vtk9 python3-matplotlib python3-meshio python3-pybind11 python3-scipy python3-tqdm
   python3-ezdxf python3-svgelements python3-pil
   python3-sphinx python3-myst-parser python3-sphinx-rtd-theme
+  ipython3 python3-ipykernel jupyter-notebook python3-nbclient python3-nbformat python3-nbconvert xvfb
 )
 
 missing=()

@@ -35,6 +35,8 @@ class Launcher(unittest.TestCase):
         self.assertIn("--gdb", out.stdout)
         self.assertIn("--valgrind", out.stdout)
         self.assertIn("--all-ranks", out.stdout)
+        for mode in ("--ipython", "notebook", "lab", "--install-kernel"):
+            self.assertIn(mode, out.stdout)
         self.assertIn("only rank\n0's stdout is shown", out.stdout)  # the help's last line is printed
 
     def test_rank_from_each_mpi_launcher(self):
@@ -77,6 +79,85 @@ class Launcher(unittest.TestCase):
                                  "import lbmd, oif; print('FROM', lbmd.__file__)")
             self.assertEqual(out.returncode, 0, out.stderr)
             self.assertIn("FROM " + prefix, out.stdout)
+
+    def test_ipython(self):
+        out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "--ipython", "--no-banner", "--colors=NoColor",
+                             stdin="import lbmd, oif; print('FROM', lbmd.__file__, oif.__name__)\n")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertIn("FROM " + os.path.join(BUILD, "python", "lbmd"), out.stdout)
+        out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "--ipython", "-c", "import IPython, lbmd; "
+                             "print('IPY', IPython.get_ipython() is not None, lbmd.size)")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertIn("IPY True 1", out.stdout)
+
+    def test_notebook_starts(self):
+        """`pyoif notebook` runs Debian's Jupyter notebook (here only its
+        version: a server would wait for a browser)."""
+        out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "notebook", "--version")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertRegex(out.stdout.strip(), r"^\d+\.\d+")
+
+    def test_lab_or_notebook_message(self):
+        """`pyoif lab` without Jupyter Lab says so (Debian 12 has none)."""
+        probe = subprocess.run(["/usr/bin/python3", "-c", "import jupyterlab"], capture_output=True)
+        if probe.returncode == 0:
+            self.skipTest("Jupyter Lab is installed")
+        out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "lab", "--version")
+        self.assertNotEqual(out.returncode, 0)
+        self.assertIn("Jupyter Lab is not installed", out.stderr)
+        self.assertIn("pyoif notebook", out.stderr)
+
+    def kernelspecs(self, jupyter_path):
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "JUPYTER_PATH")}
+        env["JUPYTER_PATH"] = jupyter_path
+        out = subprocess.run(["/usr/bin/python3", "-m", "jupyter_client.kernelspecapp", "list"],
+                             capture_output=True, text=True, env=env, timeout=120)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        return out.stdout
+
+    def execute_notebook(self, jupyter_path):
+        """A tiny notebook on the kernel "pyoif" (nbclient), as Jupyter
+        would run it with that JUPYTER_PATH; returns its first output."""
+        import nbformat
+        from nbclient import NotebookClient
+        nb = nbformat.v4.new_notebook()
+        nb.cells.append(nbformat.v4.new_code_cell("import lbmd, oif\nprint('KERNEL', lbmd.__file__, "
+                                                  "oif.__name__)"))
+        saved = {k: os.environ.get(k) for k in ("JUPYTER_PATH", "PYTHONPATH")}
+        os.environ["JUPYTER_PATH"] = jupyter_path
+        os.environ.pop("PYTHONPATH", None)  # the kernel spec must bring it
+        try:
+            NotebookClient(nb, kernel_name="pyoif", timeout=120).execute()
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
+        return nb.cells[0].outputs[0]["text"]
+
+    def test_kernel_spec_build_tree(self):
+        jupyter = os.path.join(BUILD, "share", "jupyter")
+        self.assertIn(os.path.join(jupyter, "kernels", "pyoif"), self.kernelspecs(jupyter))
+        self.assertIn("KERNEL " + os.path.join(BUILD, "python", "lbmd"), self.execute_notebook(jupyter))
+        with tempfile.TemporaryDirectory() as prefix:  # --install-kernel --prefix: jupyter kernelspec install
+            out = self.run_pyoif(os.path.join(BUILD, "pyoif"), "--install-kernel", "--prefix", prefix)
+            self.assertEqual(out.returncode, 0, out.stderr)
+            spec = os.path.join(prefix, "share", "jupyter", "kernels", "pyoif", "kernel.json")
+            with open(spec) as f:
+                self.assertIn(os.path.join(BUILD, "python"), f.read())
+
+    def test_installed_kernel_spec(self):
+        with tempfile.TemporaryDirectory() as prefix:
+            inst = subprocess.run(["cmake", "--install", BUILD, "--prefix", prefix],
+                                  capture_output=True, text=True, timeout=300)
+            self.assertEqual(inst.returncode, 0, inst.stderr)
+            jupyter = os.path.join(prefix, "share", "jupyter")
+            listed = self.kernelspecs(jupyter)
+            self.assertIn("pyoif", listed)
+            self.assertIn(os.path.join(jupyter, "kernels", "pyoif"), listed)
+            self.assertIn("KERNEL " + os.path.join(prefix, "lib", "pyoif", "python", "lbmd"),
+                          self.execute_notebook(jupyter))
 
 
 if __name__ == "__main__":
