@@ -75,7 +75,10 @@ class GuideBuild(unittest.TestCase):
                 api = f.read()
             for name in ("oif.OifCellType", "oif.OifCell", "oif.seed_cells"):
                 self.assertIn(f'id="{name}"', api, f"the API reference lacks {name}")
-            for page in ("installation", "concepts", "tutorial", "bad-input", "performance"):
+            self.assertGreater(os.path.getsize(os.path.join(html, "tutorials", "bifurcation.html")), 100_000,
+                               "the tutorial notebook, rendered with its pictures")
+            for page in ("installation", "concepts", "tutorial", "porting", "io-and-interactive", "visualization",
+                         "bad-input", "performance"):
                 self.assertTrue(os.path.isfile(os.path.join(html, page + ".html")), page)
 
 

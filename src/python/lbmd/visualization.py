@@ -277,7 +277,7 @@ def geometry(system, axis="z", position=None, *, outlines=True, resolution=0.5, 
 # --- fluid ---------------------------------------------------------------------------
 def fluid_slice(system, axis="z", position=None, component="magnitude"):
     """(values, in-plane velocity, flags, plane coordinate) of one lattice
-    plane: values the speed |u| (or component 'x', 'y', 'z') per node,
+    plane: values the speed ``|u|`` (or component 'x', 'y', 'z') per node,
     indexed [horizontal, vertical]; the in-plane velocity (..., 2); the
     boundary flags. Engine units; collective under MPI."""
     owner = "visualization.fluid_slice"
