@@ -55,6 +55,27 @@ class GuideExamples(unittest.TestCase):
         self.assertGreaterEqual(ran, 35, "fewer examples than the guide has")
 
 
+class DocstringExamples(unittest.TestCase):
+    """The API reference is made from the docstrings: their >>> examples run
+    (doctest), in every module the reference documents."""
+
+    def test_docstring_examples(self):
+        import doctest
+        import importlib
+        import re
+        modules = []
+        for page in ("lbmd.md", "oif.md"):
+            with open(os.path.join(SOURCE, "doc", "api", page), encoding="utf-8") as f:
+                modules += re.findall(r"^\.\. automodule:: (\S+)", f.read(), re.M)
+        self.assertGreaterEqual(len(modules), 20)
+        attempted = 0
+        for name in modules:
+            result = doctest.testmod(importlib.import_module(name), verbose=False, report=True)
+            self.assertEqual(result.failed, 0, f"{name}: {result.failed} docstring examples failed")
+            attempted += result.attempted
+        self.assertGreaterEqual(attempted, 3, "the docstrings' examples were not found")
+
+
 class GuideBuild(unittest.TestCase):
     def test_builds_without_warnings(self):
         import importlib.util

@@ -1,9 +1,9 @@
-"""Random placement of many cells in a geometry, without overlaps::
-
-    cells = oif.seed_cells(system, [rbc_type, rare_type], counts=[40, 1],
-                           boundaries=[wall_bottom, wall_top, obstacle],
-                           particle_types=[0, 1], seed=12)
-    cells = oif.seed_cells(system, rbc_type, haematocrit=0.04, boundaries=walls, seed=3)
+"""Random placement of many cells in a geometry, without overlaps: e.g.
+``oif.seed_cells(system, [rbc_type, rare_type], counts=[40, 1],
+boundaries=[wall_bottom, wall_top, obstacle], particle_types=[0, 1], seed=12)``
+places 40 cells of one type and one of another, and
+``oif.seed_cells(system, rbc_type, haematocrit=0.04, boundaries=walls, seed=3)``
+fills the box to a haematocrit (examples that run: doc/oif.md).
 
 Cells are placed one by one at uniformly random centres (inside `region`)
 with uniformly random orientations, and a placement is kept only if
