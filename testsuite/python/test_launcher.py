@@ -123,17 +123,10 @@ class Launcher(unittest.TestCase):
         nb = nbformat.v4.new_notebook()
         nb.cells.append(nbformat.v4.new_code_cell("import lbmd, oif\nprint('KERNEL', lbmd.__file__, "
                                                   "oif.__name__)"))
-        saved = {k: os.environ.get(k) for k in ("JUPYTER_PATH", "PYTHONPATH")}
-        os.environ["JUPYTER_PATH"] = jupyter_path
-        os.environ.pop("PYTHONPATH", None)  # the kernel spec must bring it
-        try:
+        from unittest import mock
+        with mock.patch.dict(os.environ, {"JUPYTER_PATH": jupyter_path}):  # restored afterwards
+            os.environ.pop("PYTHONPATH", None)  # the kernel spec must bring it
             NotebookClient(nb, kernel_name="pyoif", timeout=120).execute()
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
         return nb.cells[0].outputs[0]["text"]
 
     def test_kernel_spec_build_tree(self):

@@ -42,19 +42,12 @@ class Tutorial(unittest.TestCase):
         for c in nb.cells:
             if c.cell_type == "code":
                 c.outputs = []
-        saved = {k: os.environ.get(k) for k in ("JUPYTER_PATH", "PYTHONPATH")}
-        os.environ["JUPYTER_PATH"] = os.path.join(BUILD, "share", "jupyter")  # the kernel "pyoif" is there
-        os.environ.pop("PYTHONPATH", None)  # the kernel spec brings it
-        try:
-            with tempfile.TemporaryDirectory() as tmp:
-                NotebookClient(nb, kernel_name="pyoif", timeout=300,
-                               resources={"metadata": {"path": tmp}}).execute()
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        from unittest import mock
+        # the kernel "pyoif" is in the build tree's share/jupyter; the environment is restored afterwards
+        with mock.patch.dict(os.environ, {"JUPYTER_PATH": os.path.join(BUILD, "share", "jupyter")}), \
+                tempfile.TemporaryDirectory() as tmp:
+            os.environ.pop("PYTHONPATH", None)  # the kernel spec brings it
+            NotebookClient(nb, kernel_name="pyoif", timeout=300, resources={"metadata": {"path": tmp}}).execute()
         self.assertEqual(errors(nb), [])
         self.assertGreaterEqual(len(pictures(nb)), 6)
         run = [c for c in nb.cells if c.cell_type == "code" and "view.run(" in c.source][0]
