@@ -4,7 +4,8 @@ channel that bifurcates into two daughter branches and joins again: the
 scene of the PyOIF paper's study (its Figs 2-5), its physical inputs in SI.
 
     pyoif samples/cell_flow_in_bifurcation.py [--small | --full] [--case A|B|C]
-          [--cells N] [--rare] [--seed S] [--duration MS] [--output-every US]
+          [--cells N] [--rare] [--stiff-fraction F] [--seed S] [--orientation auto|random|flat]
+          [--duration MS] [--output-every US]
           [--speed MM_S] [--height UM] [--output DIR] [--vtk] [--no-plots]
           [--progress auto|bar|lines|off] [--checkpoint FILE] [--checkpoint-every MS]
           [--resume]
@@ -157,6 +158,10 @@ def parse_arguments(argv=None):
                          "suspension, Fig 5); "
                          "with the same --seed the cells start where a uniform run's do")
     ap.add_argument("--seed", type=int, default=1, help="random seed of the cells' placement")
+    ap.add_argument("--orientation", choices=("auto", "random", "flat"), default="auto",
+                    help="the cells' start: random orientations, or discs lying flat between the walls (turned "
+                         "at random about the height only: packs about 100 RBCs into the paper's 20 um "
+                         "channel); auto (default): random, flat where random ones do not fit")
     ap.add_argument("--duration", type=float, default=None, help="simulated flow in ms (small 8, full 138)")
     ap.add_argument("--output-every", type=float, default=None, help="output interval in us (small 20, full 200)")
     ap.add_argument("--speed", type=float, default=None,
@@ -378,8 +383,21 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
     # 0.07 in these units, is lighter still and needs no other change
     gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
     node_mass = gamma * time_step / 0.3
-    cells = oif.seed_cells(system, types, counts=counts, boundaries=seeding_boundaries, region=region,
-                           particle_types=ptypes, seed=args.seed, particle_mass=node_mass)
+    seeding = dict(counts=counts, boundaries=seeding_boundaries, region=region, particle_types=ptypes,
+                   seed=args.seed, particle_mass=node_mass)
+    if args.orientation == "flat":
+        cells = oif.seed_cells(system, types, rotation_axis=(0, 0, 1), **seeding)
+    else:
+        try:
+            cells = oif.seed_cells(system, types, **seeding)
+        except oif.SeedingError as random_failed:
+            if args.orientation == "random":
+                raise
+            # e.g. the paper's 100 RBCs of its Fig 5 in the 20 um channel: random
+            # orientations jam at about 77; discs parallel to the walls fit
+            cells = oif.seed_cells(system, types, rotation_axis=(0, 0, 1), **seeding)
+            print(f"note: {n_rbc} randomly oriented cells did not fit ({random_failed}); seeded them lying "
+                f"flat between the walls instead (--orientation flat)")
     system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
     for t in set(ptypes):
         system.non_bonded_inter[t, 10].soft_sphere.set_params(

@@ -665,6 +665,12 @@ def seed_boundary_not_shape(sc):
     oif.seed_cells(sc.system, sc.cell_type, counts=1, boundaries=["wall"], seed=1)
 
 
+@case("seed_cells(..., rotation_axis=[0, 0, 0]): no direction", ValueError, "rotation_axis", "non-zero vector",
+      scene="cell")
+def seed_rotation_axis_zero(sc):
+    oif.seed_cells(sc.system, sc.cell_type, counts=1, rotation_axis=[0, 0, 0], seed=1)
+
+
 @case("system.box_l = [3.5, 3.5, 3.5] once a cell 4 wide exists (it would overlap its own periodic image)",
       ValueError, "box_l", "cell 0", scene="cell")
 def cell_change_box(sc):

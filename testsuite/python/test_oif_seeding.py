@@ -130,6 +130,58 @@ class TestSeeding(unittest.TestCase):
         for _, origin, _ in placed:
             self.assertGreater(np.linalg.norm(origin - host.get_origin()), 7.0 + gap)
 
+    def test_rotation_axis_lays_discs_flat(self):
+        """rotation_axis=(0, 0, 1): every RBC turned about z only (its disc
+        stays in the x-y plane, at a random angle), so discs fit into a gap
+        too low for randomly oriented ones; reproducible from the seed."""
+        _, _, rbc0, _ = self.make()
+        rel = rbc0.mesh.positions()
+        thickness = np.ptp(rel[:, 2])
+        margin = 0.5 * rbc0.mesh.max_edge_length()
+        h_low = 2 * WALL + thickness + 2 * margin + 0.4  # a disc standing on edge (4 um) cannot fit
+        self.assertLess(h_low - 2 * WALL - 2 * margin, 2 * R)
+
+        def low_channel():
+            system = lbmd.System(box_l=[L, L, h_low])
+            system.time_step = 0.1
+            walls = [lbmd.shapes.Wall(normal=[0, 0, 1], dist=WALL),
+                     lbmd.shapes.Wall(normal=[0, 0, -1], dist=-(h_low - WALL))]
+            rbc = oif.OifCellType(*oif.mesh_files("rbc162"), system=system, resize=(R, R, R))
+            return system, walls, rbc
+
+        system, walls, rbc = low_channel()
+        with self.assertRaises(SeedingError):  # random orientations: the discs would have to lie flat by chance
+            oif.seed_cells(system, rbc, counts=6, boundaries=walls, seed=5, max_attempts=300)
+        self.assertEqual(len(system.part), 0)
+        cells = oif.seed_cells(system, rbc, counts=6, boundaries=walls, seed=5, rotation_axis=(0, 0, 2.0))
+        self.assertEqual(len(cells), 6)
+        spins = []
+        gap = 1.2 * rbc.mesh.max_edge_length()
+        for i, c in enumerate(cells):
+            p = c.mesh.positions()
+            centred = p - p.mean(axis=0)
+            # only turned about z: the z coordinates are the relaxed mesh's, node for node
+            np.testing.assert_allclose(centred[:, 2], rel[:, 2] - rel[:, 2].mean(), atol=1e-9)
+            np.testing.assert_allclose(np.linalg.norm(centred[:, :2], axis=1),
+                                       np.linalg.norm((rel - rel.mean(axis=0))[:, :2], axis=1), atol=1e-9)
+            self.assertGreaterEqual(p[:, 2].min(), WALL + margin - 1e-9)
+            self.assertLessEqual(p[:, 2].max(), h_low - WALL - margin + 1e-9)
+            k = int(np.argmax(rel[:, 0]))  # the node at the rim's +x end: where it went gives the spin
+            spins.append(np.arctan2(centred[k, 1], centred[k, 0]))
+            for other in cells[i + 1:]:
+                d = p[:, None, :] - other.mesh.positions()[None, :, :]
+                d[..., :2] -= L * np.round(d[..., :2] / L)
+                self.assertGreaterEqual(np.linalg.norm(d, axis=2).min(), gap - 1e-9)
+        self.assertGreater(np.ptp(spins), 1.0)  # random angles, not one orientation
+        system2, walls2, rbc2 = low_channel()
+        again = oif.seed_cells(system2, rbc2, counts=6, boundaries=walls2, seed=5, rotation_axis=(0, 0, 1))
+        for c, c2 in zip(cells, again):  # the same seed, the same cells
+            np.testing.assert_allclose(c.mesh.positions(), c2.mesh.positions(), atol=1e-12)
+        for bad in ([0, 0, 0], [1, 0], "z", [np.nan, 0, 1]):
+            with self.assertRaisesRegex(ValueError, "'rotation_axis' must be None or a non-zero vector"):
+                oif.seed_cells(system, rbc, counts=1, boundaries=walls, rotation_axis=bad)
+        self.assertEqual(len(system.part), 6 * len(rel))  # the bad calls created nothing
+
     def test_bad_arguments_create_nothing(self):
         system, walls, rbc, sphere = self.make()
         other = lbmd.System(box_l=[L, L, H])
