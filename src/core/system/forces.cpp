@@ -219,12 +219,13 @@ void System::add_constraint_forces(Energies* e) {
   c.normal_j = Vec3::Zero();
   // the largest range of any pair: beyond it no constraint acts
   const double range = nonbonded.max_range();
-  std::vector<double>& dist = m_constraint_dist;
-  dist.resize(p.n_local());
-  // spread over ranks: the distances of this rank's particles only
+  // spread over ranks: this rank's particles only (distances and the
+  // loop below: a pass over every stored particle per shape cost as much
+  // as the walls' own work at 2 ranks), in ascending local index as one
+  // rank goes, so each wall's total force sums in the serial order
   const std::uint8_t* own = owned_mask();
-  std::vector<Vec3>& owned_pos = m_constraint_pos;
   std::vector<std::size_t>& owned_index = m_constraint_index;
+  std::vector<Vec3>& owned_pos = m_constraint_pos;
   if (own) {
     owned_pos.clear();
     owned_index.clear();
@@ -234,50 +235,45 @@ void System::add_constraint_forces(Energies* e) {
         owned_index.push_back(i);
       }
   }
+  const std::size_t n_eval = own ? owned_index.size() : p.n_local();
+  const Vec3* eval_pos = own ? owned_pos.data() : p.pos.data();
+  std::vector<double>& dist = m_constraint_dist;
+  dist.resize(n_eval);
   for (auto& constraint : m_constraints) {
     constraint->total_force.setZero();
     // all distances in one call (a tight loop for walls; bounded shapes skip
     // the exact distance of particles farther than the range from their
     // bounding box), the force where a particle is within its pair's range
-    if (own) {
-      std::vector<double>& owned_dist = m_constraint_owned_dist;
-      owned_dist.resize(owned_pos.size());
-      constraint->shape->signed_distances(owned_pos.data(), owned_pos.size(), range,
-                                          owned_dist.data());
-      std::fill(dist.begin(), dist.end(), HUGE_VAL);
-      for (std::size_t k = 0; k < owned_index.size(); ++k)
-        dist[owned_index[k]] = owned_dist[k];
-    } else {
-      constraint->shape->signed_distances(p.pos.data(), p.n_local(), range, dist.data());
-    }
-    for (std::size_t i = 0; i < p.n_local(); ++i) {
-      if (dist[i] >= range)
+    constraint->shape->signed_distances(eval_pos, n_eval, range, dist.data());
+    for (std::size_t k = 0; k < n_eval; ++k) {
+      if (dist[k] >= range)
         continue;
+      const std::size_t i = own ? owned_index[k] : k;
       const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
       if (!params)
         continue;
-      if (dist[i] > 0.0) {
-        if (dist[i] >= params->range)
+      if (dist[k] > 0.0) {
+        if (dist[k] >= params->range)
           continue;
       } else if (constraint->penetrable) {
         // inside a penetrable shape: as in ESPResSo, the interaction at the
         // mirrored distance -dist, along the same vector dist * normal (so a
         // repulsion pushes the particle deeper in, away from the surface),
         // unless only_positive
-        if (constraint->only_positive || !(dist[i] < 0.0) || -dist[i] >= params->range)
+        if (constraint->only_positive || !(dist[k] < 0.0) || -dist[k] >= params->range)
           continue;
       } else {
         std::ostringstream msg;
         msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
             << ") penetrated the non-penetrable " << constraint->shape->name()
-            << " constraint (signed distance " << dist[i] << ") at time " << time
+            << " constraint (signed distance " << dist[k] << ") at time " << time
             << "; at the start of a run this means it was placed inside: check the initial "
                "positions; later, strengthen the node-wall interaction or reduce the time step";
         throw SimulationInstability("wall_penetration", msg.str())
             .at_particle(p.id[i])
             .in_cell(p.mol_id[i])
             .at_time(time)
-            .with_value(dist[i]);
+            .with_value(dist[k]);
       }
       double exact;
       Vec3 normal;

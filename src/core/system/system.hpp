@@ -337,11 +337,11 @@ private:
     m_fluid_version_of_forces = m_lb ? m_lb->state_version() : 0;
     m_shape_version_of_forces = constraint_shape_version();
   }
-  std::vector<double> m_constraint_dist; ///< per particle, one constraint at a time
-  /// spread over ranks: this rank's particles' positions, indices, distances
+  /// per particle evaluated (spread over ranks: this rank's), one constraint at a time
+  std::vector<double> m_constraint_dist;
+  /// spread over ranks: this rank's particles' positions and local indices
   std::vector<Vec3> m_constraint_pos;
   std::vector<std::size_t> m_constraint_index;
-  std::vector<double> m_constraint_owned_dist;
   std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;
