@@ -144,19 +144,43 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
 
 namespace {
 
+/** The indices of the particles marked in `current` (the particles this rank
+ *  keeps current on a decomposed lattice), ascending, kept in the ledger
+ *  while the mask stays (it changes at re-sorts). True when the list was
+ *  made anew: then couple_on_this_rank clears the entries of the particles
+ *  not listed, once, so that its passes need to look at the listed ones
+ *  only. */
+bool list_current(LBFluid::CouplingLedger& ledger, const std::uint8_t* current, std::size_t n) {
+  if (ledger.current_mask.size() == n &&
+      std::equal(current, current + n, ledger.current_mask.begin()))
+    return false;
+  ledger.current_mask.assign(current, current + n);
+  ledger.current_list.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (current[i])
+      ledger.current_list.push_back(static_cast<std::uint32_t>(i));
+  return true;
+}
+
 /** The coupling of the particles this rank computes (all, on one rank):
  *  their forces into the ledger's coupling_force (zero where not computed),
  *  their deposits into the fluid's force field. */
-template <class IsCurrent>
 void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
                          const CouplingParams& params, std::uint64_t step, double time_step,
-                         const StencilFrame& frame, IsCurrent&& is_current) {
+                         const StencilFrame& frame, const std::vector<std::uint32_t>* listed,
+                         bool list_changed) {
 
   // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
   // repeated computation for the same step deposits F dt / 2 after taking
   // back the in-flight half of the previous computation of this step
   auto& p = particles;
   const std::size_t n = p.n_local();
+  // the particles to look at: all, or (decomposed) those this rank keeps
+  // current, which is the cheaper pass at 2 ranks already (the others'
+  // entries were cleared when the list was made)
+  const std::size_t n_looked = listed ? listed->size() : n;
+  const std::uint32_t* const looked = listed ? listed->data() : nullptr;
+  auto particle = [looked](std::size_t k) -> std::size_t { return looked ? looked[k] : k; };
   // On a non-periodic axis the lattice ends at the box: a particle outside
   // it would take its stencil from the far side (wrapped indices). Checked
   // before anything changes, so that the particle can be moved back and the
@@ -168,9 +192,11 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
                      box.periodic()[1] ? HUGE_VAL : box.length()[1],
                      box.periodic()[2] ? HUGE_VAL : box.length()[2]);
     bool outside = false;
-    for (std::size_t i = 0; i < n; ++i)
-      outside |= is_current(i) && !((p.pos[i].array() >= lower.array()).all() &&
-                                    (p.pos[i].array() <= upper.array()).all());
+    for (std::size_t k = 0; k < n_looked; ++k) {
+      const std::size_t i = particle(k);
+      outside |=
+          !((p.pos[i].array() >= lower.array()).all() && (p.pos[i].array() <= upper.array()).all());
+    }
     if (outside)
       throw_outside(p, box);
   }
@@ -235,6 +261,22 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
     ledger.layout_version = p.layout_version;
     ledger.numbered_step = step;
   }
+  // The particles not listed: no stencil here, no giver, no force, nothing
+  // deposited. Set when the list changes (after the retract pass above,
+  // which takes back the last computation's deposits with its stencils) and
+  // when the stencils were made anew; the passes below skip them.
+  ledger.coupling_force.resize(n);
+  if (split && ledger.giver.size() != n)
+    ledger.giver.assign(n, -1);
+  if (looked && (list_changed || renumber))
+    for (std::size_t i = 0; i < n; ++i)
+      if (!ledger.current_mask[i]) {
+        ledger.stencils[i].key = not_here_bit;
+        if (split)
+          ledger.giver[i] = -1;
+        ledger.coupling_force[i].setZero();
+        ledger.last_impulse[i].setZero();
+      }
   CompactStencil* const stencils = ledger.stencils.data();
   std::uint32_t* const entries = ledger.stencil_entries.data();
   const std::size_t n_listed = ledger.n_nodes;
@@ -245,15 +287,8 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
   // the rank that gives each particle its force (that of its stencil's
   // first node): looked up when the stencil moved, as the key tells
   std::vector<int>& giver = ledger.giver;
-  if (split && giver.size() != n)
-    giver.assign(n, -1);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!is_current(i)) { // not up to date here: another rank couples it
-      stencils[i].key = not_here_bit;
-      if (split)
-        giver[i] = -1;
-      continue;
-    }
+  for (std::size_t k = 0; k < n_looked; ++k) {
+    const std::size_t i = particle(k);
     bool base_owned;
     Vec3i base;
     const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned, base);
@@ -293,8 +328,8 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
   random::Key key{params.seed, static_cast<std::uint64_t>(random::Stream::lb_coupling), step, 0};
   std::vector<Vec3>& coupling_force = ledger.coupling_force;
-  coupling_force.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t q = 0; q < n_looked; ++q) {
+    const std::size_t i = particle(q);
     const CompactStencil& s = stencils[i];
     if (not_here(s)) {
       coupling_force[i].setZero();
@@ -357,37 +392,45 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   // anything can fail on one rank and not on another.
   const StencilFrame frame(fluid);
   const bool split = frame.any_split;
-  if (split)
+  // (no particles, no stencil reads them: every rank stores every particle,
+  // so all ranks skip this exchange alike; 8 % of a fluid-only step at 2
+  // ranks)
+  if (split && particles.n_local() > 0)
     fluid.refresh_ghost_velocities();
   const std::uint8_t* const current = distribution ? distribution->current : nullptr;
-  auto is_current = [current](std::size_t i) { return !current || current[i]; };
   auto& ledger = fluid.coupling_ledger();
   auto& p = particles;
   const std::size_t n = p.n_local();
   const bool distributed = distribution && distribution->share;
   if (split && !distributed) // (System always passes it with a split lattice)
     throw std::logic_error("couple_particles: a split lattice needs a CouplingDistribution");
+  const bool list_changed = current && list_current(ledger, current, n);
+  const std::vector<std::uint32_t>* listed = current ? &ledger.current_list : nullptr;
   try {
-    couple_on_this_rank(fluid, p, box, params, step, time_step, frame, is_current);
+    couple_on_this_rank(fluid, p, box, params, step, time_step, frame, listed, list_changed);
   } catch (...) {
     if (distributed) { // the other ranks wait for this one's part of the exchange
       ledger.coupling_force.assign(n, Vec3::Zero());
       ledger.giver.assign(n, -1);
-      distribution->share(ledger.coupling_force, ledger.giver);
+      distribution->share(ledger.coupling_force, ledger.giver, nullptr);
+      ledger.current_mask.clear(); // the list is made anew (and the entries cleared) next time
     }
     throw;
   }
   std::vector<Vec3>& coupling_force = ledger.coupling_force;
   if (split) {
     const auto start = std::chrono::steady_clock::now();
-    distribution->share(coupling_force, ledger.giver);
+    distribution->share(coupling_force, ledger.giver, listed);
     fluid.add_coupling_exchange_seconds(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   // in flight: half of this step's impulses, of the particles this rank
-  // integrates (summed over the ranks where they are spread)
+  // integrates (summed over the ranks where they are spread; the unlisted
+  // particles' forces are zero)
   Vec3 impulse_sum = Vec3::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
+  const std::size_t n_looked = listed ? listed->size() : n;
+  for (std::size_t k = 0; k < n_looked; ++k) {
+    const std::size_t i = listed ? (*listed)[k] : k;
     p.force[i] += coupling_force[i];
     impulse_sum += -time_step * coupling_force[i];
   }

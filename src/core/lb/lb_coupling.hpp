@@ -30,12 +30,16 @@ struct CouplingParams {
  *  computed it (where its stencil touches this rank's subdomain) and the
  *  giving rank per particle (that of the stencil's first node, -1 where this
  *  rank did not compute it), it must leave in force[i] the force of every
- *  particle this rank integrates and zero elsewhere. It is called on every
- *  rank even when the computation failed (then with zero forces), before
- *  the error is raised, so that no rank waits in vain. */
+ *  particle this rank integrates and zero elsewhere. `listed` holds the
+ *  indices of the current particles (ascending; null: all particles): the
+ *  forces of the others are zero on the call already and must stay so. It
+ *  is called on every rank even when the computation failed (then with zero
+ *  forces), before the error is raised, so that no rank waits in vain. */
 struct CouplingDistribution {
   const std::uint8_t* current = nullptr;
-  std::function<void(std::vector<Vec3>& force, const std::vector<int>& giver)> share;
+  std::function<void(std::vector<Vec3>& force, const std::vector<int>& giver,
+                     const std::vector<std::uint32_t>* listed)>
+      share;
 };
 
 /** Adds gamma (u - v) (+ noise) to each local particle's force and the opposite

@@ -64,7 +64,6 @@
 #include <memory>
 #include <string>
 #include <type_traits>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -302,8 +301,8 @@ public:
   /** Velocity (MD units) at padded index n, ghost nodes of a decomposed
    *  lattice included (from refresh_ghost_velocities). */
   Vec3 coupling_velocity(std::size_t n) const {
-    if (!m_flag[n] && m_grid.size() > 1 && !is_domain_node(n))
-      return m_ghost_velocity[m_ghost_slot.at(n)];
+    if (!m_flag[n] && !m_ghost_slot.empty() && m_ghost_slot[n] != no_ghost_slot)
+      return m_ghost_velocity[m_ghost_slot[n]];
     return velocity_at_index(n);
   }
   /** Difference of the padded indices of neighbours along axis d. */
@@ -411,6 +410,11 @@ public:
     std::vector<int> giver;
     std::vector<Vec3> coupling_force;           ///< per particle, this pass
     std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
+    /// decomposed lattice: the particles this rank keeps current (their
+    /// indices, ascending) and the mask the list was made from; the others'
+    /// stencils are marked not here, their givers -1, forces and impulses 0
+    std::vector<std::uint32_t> current_list;
+    std::vector<std::uint8_t> current_mask;
   };
   CouplingLedger& coupling_ledger() {
     update_boundaries(); // a flagging may move the cuts, which resets the ledger
@@ -647,16 +651,22 @@ private:
   /// are folded back into them), and of this rank's faces that fill the
   /// neighbour's ghosts, each in the order both sides list them.
   struct HaloPeer {
-    int rank;
+    int rank = -1;
     std::vector<std::size_t> ghost, face;
     std::vector<std::size_t> velocity_ghost, velocity_face; ///< nodes (coupling)
+    std::vector<std::uint32_t> velocity_slot; ///< m_ghost_velocity slot of each velocity_ghost
     mutable std::vector<double> send, recv;
     /// the population halo in single precision (MPI_FLOAT: half the bytes)
     mutable std::vector<float> send_single, recv_single;
   };
   std::vector<HaloPeer> m_peers;
   std::vector<Vec3> m_ghost_velocity;
-  std::unordered_map<std::size_t, std::size_t> m_ghost_slot; ///< padded ghost -> m_ghost_velocity
+  /// padded index -> slot in m_ghost_velocity (no_ghost_slot: none), on a
+  /// decomposed lattice: a dense table (4 bytes a node against the
+  /// populations' 76 or more) because the coupling looks up every node it
+  /// reads, at every step
+  std::vector<std::uint32_t> m_ghost_slot;
+  static constexpr std::uint32_t no_ghost_slot = ~std::uint32_t{0};
   std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
   mutable double m_halo_seconds = 0.0, m_coupling_exchange_seconds = 0.0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};

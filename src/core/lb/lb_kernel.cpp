@@ -558,7 +558,8 @@ void LBFluid::build_halo_pairs() {
     for (HaloPeer& p : m_peers)
       if (p.rank == rank)
         return p;
-    m_peers.push_back({rank, {}, {}, {}, {}, {}, {}, {}, {}});
+    m_peers.emplace_back();
+    m_peers.back().rank = rank;
     return m_peers.back();
   };
   const Vec3i me = m_grid.coords();
@@ -608,14 +609,19 @@ void LBFluid::build_halo_pairs() {
         visit_region(m_origin, m_n, o, false, [&](const Vec3i& g, int) {
           const std::size_t ghost =
               index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
-          m_ghost_slot.emplace(ghost, m_ghost_slot.size());
+          if (m_ghost_slot.empty())
+            m_ghost_slot.assign(m_stride, no_ghost_slot);
+          if (m_ghost_slot[ghost] == no_ghost_slot) {
+            m_ghost_slot[ghost] = static_cast<std::uint32_t>(m_ghost_velocity.size());
+            m_ghost_velocity.emplace_back(Vec3::Zero());
+          }
           in.velocity_ghost.push_back(ghost);
+          in.velocity_slot.push_back(m_ghost_slot[ghost]);
         });
         visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, false,
                      [&](const Vec3i& g, int) { out.velocity_face.push_back(domain_index(g)); });
       }
   m_halo = merge_runs(std::move(pairs));
-  m_ghost_velocity.assign(m_ghost_slot.size(), Vec3::Zero());
 }
 
 std::size_t LBFluid::halo_bytes() const {
@@ -702,8 +708,8 @@ void LBFluid::refresh_ghost_velocities() {
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (const HaloPeer& peer : m_peers)
-    for (std::size_t i = 0; i < peer.velocity_ghost.size(); ++i)
-      m_ghost_velocity[m_ghost_slot.at(peer.velocity_ghost[i])] =
+    for (std::size_t i = 0; i < peer.velocity_slot.size(); ++i)
+      m_ghost_velocity[peer.velocity_slot[i]] =
           Vec3(peer.recv[3 * i], peer.recv[3 * i + 1], peer.recv[3 * i + 2]);
   m_ghost_velocity_version = m_state_version;
   m_coupling_exchange_seconds +=

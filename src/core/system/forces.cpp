@@ -355,8 +355,9 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
     if (m_lb && m_lb_coupling.active) {
       if (m_spread.active) {
         const lb::CouplingDistribution spread{
-            m_spread.current.data(), [this](std::vector<Vec3>& f, const std::vector<int>& giver) {
-              share_coupling_forces(f, giver);
+            m_spread.current.data(), [this](std::vector<Vec3>& f, const std::vector<int>& giver,
+                                            const std::vector<std::uint32_t>* listed) {
+              share_coupling_forces(f, giver, listed);
             }};
         try { // every rank takes part, a failed one too (see couple_particles)
           lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step,

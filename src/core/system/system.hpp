@@ -294,7 +294,8 @@ private:
    *  that keep copies. */
   void exchange_current(bool normals);
   /** The coupling's forces to their particles' owners (CouplingDistribution). */
-  void share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver);
+  void share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver,
+                             const std::vector<std::uint32_t>* listed);
   /** Largest code over the ranks (one allreduce; the code itself on one rank). */
   int agree(int code) const;
   /** Whether any membrane bond exists (the same on every rank). */

@@ -510,7 +510,8 @@ void System::exchange_current(bool normals) {
     }
 }
 
-void System::share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver) {
+void System::share_coupling_forces(std::vector<Vec3>& force, const std::vector<int>& giver,
+                                   const std::vector<std::uint32_t>* listed) {
   // Each rank sends, for every particle of the peer that it keeps current,
   // the force it computed (zero where it did not); the owner takes the value
   // of the particle's giver: a copy, no sum. Fixed sizes (the lists), so a
@@ -533,9 +534,16 @@ void System::share_coupling_forces(std::vector<Vec3>& force, const std::vector<i
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   const std::vector<std::uint8_t>& owned = m_spread.owned;
-  for (std::size_t i = 0; i < force.size(); ++i)
+  auto keep_own = [&](std::size_t i) {
     if (!owned[i] || giver[i] != me)
       force[i].setZero();
+  };
+  if (listed) // the others' forces are zero already
+    for (const std::uint32_t i : *listed)
+      keep_own(i);
+  else
+    for (std::size_t i = 0; i < force.size(); ++i)
+      keep_own(i);
   for (auto& peer : m_spread.peers)
     for (std::size_t k = 0; k < peer.send.size(); ++k) {
       const int i = peer.send[k];
