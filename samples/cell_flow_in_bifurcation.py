@@ -4,7 +4,7 @@ channel that bifurcates into two daughter branches and joins again: the
 scene of the PyOIF paper's study (its Figs 2-5), its physical inputs in SI.
 
     pyoif samples/cell_flow_in_bifurcation.py [--small | --full] [--case A|B|C]
-          [--cells N] [--rare] [--stiff-fraction F] [--seed S] [--orientation auto|random|flat]
+          [--cells N] [--rare | --no-rare] [--stiff-fraction F] [--seed S] [--orientation auto|random|flat]
           [--duration MS] [--output-every US]
           [--speed MM_S] [--height UM] [--output DIR] [--vtk] [--no-plots]
           [--progress auto|bar|lines|off] [--checkpoint FILE] [--checkpoint-every MS]
@@ -152,7 +152,10 @@ def parse_arguments(argv=None):
     size.add_argument("--full", action="store_true", help="the paper's scene (slow: about 1.4 h on one core)")
     ap.add_argument("--case", choices=sorted(CASES), default="A", help="branch widths: A 10/20, B 12/18, C 15/15 um")
     ap.add_argument("--cells", type=int, default=None, help="number of RBCs (small 24, full 40; the paper: 40, 60)")
-    ap.add_argument("--rare", action="store_true", help="add the stiff rare cell (always there with --full)")
+    rare_cell = ap.add_mutually_exclusive_group()
+    rare_cell.add_argument("--rare", action="store_true", help="add the stiff rare cell (there with --full)")
+    rare_cell.add_argument("--no-rare", action="store_true",
+                           help="leave the rare cell out (--full: the RBCs alone, as the paper's Table 1 times them)")
     ap.add_argument("--stiff-fraction", type=float, default=0.0,
                     help="fraction of the RBCs that are stiffer (x5 moduli, x2.2 with --small; the paper's 'mixed' "
                          "suspension, Fig 5); "
@@ -217,7 +220,7 @@ size_name = "full" if args.full else "small"
 size = SIZES[size_name]
 n_rbc = args.cells if args.cells is not None else size["cells"]
 n_stiff = int(round(args.stiff_fraction * n_rbc))  # of the n_rbc, the stiffer population (particle type 2)
-rare = args.rare or size["rare"]
+rare = (args.rare or size["rare"]) and not getattr(args, "no_rare", False)  # (checkpoints before --no-rare)
 height = args.height * 1e-6 if args.height is not None else size["height"]
 speed = args.speed * 1e-3 if args.speed is not None else size["speed"]
 # dynamic similarity: membranes and contacts as stiff, relative to the

@@ -11,7 +11,7 @@ copies kept current point to point, all of them gathered at every re-sort:
 evaluated by one rank: doc/architecture.md "Who owns a membrane", (b)).
 
     OMP_NUM_THREADS=1 pyoif maintainer/benchmarks/scaling.py [--cells 0 5 10 20 40 60]
-        [--ranks 1 2] [--steps 500] [--cycles 1] [--repeats 2] [--tall-height 26]
+        [--ranks 1 2] [--steps 500] [--cycles 1] [--repeats 2] [--tall-height 26] [--no-rare]
         [--project 0 40 60] [--project-ranks 2 8 10 64 1024] [--seeds 3]
         [--stencil-share 0.3] [--latency message|round] [--csv scaling.csv]
         [--model-csv scaling_model.csv] [--save-runs runs.pkl | --load-runs runs.pkl]
@@ -21,9 +21,11 @@ in the environment). At default settings it takes about 3 minutes on 2 cores.
 
 Measurement. Each configuration runs samples/cell_flow_in_bifurcation.py
 --full (box 160x40x22, agrid 1 um, time step = tau = 0.1 us, RBCs of 374
-nodes and the stiff rare cell of 642 nodes) with --cells N, --cycles and
---steps as given, under `mpirun --oversubscribe --bind-to none -np K
-build/pyoif` (K = 1: the launcher alone), OMP_NUM_THREADS=1, unchanged: the
+nodes and the stiff rare cell of 642 nodes; --no-rare: the RBCs alone, as
+the paper's Table 1, and 0 RBCs is the fluid alone) with --cells N, --cycles
+and --steps as given, under `mpirun --oversubscribe --bind-to core -np K
+build/pyoif` (--bind-to none where K exceeds the cores; K = 1: the launcher
+alone), OMP_NUM_THREADS=1, unchanged: the
 sample runs inside this script's --child mode (runpy), which afterwards adds
 what the sample does not print: every rank's halo bytes and exchange
 seconds, the decomposition, the re-sorts, the fluid mask and the particles'
@@ -214,9 +216,14 @@ def run_once(args, cells, ranks, height, tmp):
                    str(args.steps), "--output", os.path.join(tmp, "out"), "--no-plots", "--progress", "off"]
     if height != FULL_HEIGHT:
         sample_args += ["--height", f"{height:g}"]
+    if args.no_rare:
+        sample_args += ["--no-rare"]
     cmd = [args.pyoif, os.path.abspath(__file__), "--child", js, "--"] + sample_args
     if ranks > 1:
-        cmd = [args.mpirun, "--oversubscribe", "--bind-to", "none", "-np", str(ranks)] + cmd
+        # each rank on its own core where there are enough (Open MPI's own
+        # default for 2 ranks), else unbound (oversubscribed)
+        bind = args.bind_to if args.bind_to != "auto" else ("core" if ranks <= (os.cpu_count() or 1) else "none")
+        cmd = [args.mpirun, "--oversubscribe", "--bind-to", bind, "-np", str(ranks)] + cmd
     env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     if p.returncode != 0:
@@ -402,13 +409,13 @@ def rank_loads(grid, solid, scene):
                 V=float(np.sum(cell_nodes)))
 
 
-def random_scene(box, n_rbc, rng, meshes):
-    """ownership_model.scene for n_rbc RBCs + the rare cell in a box: node
+def random_scene(box, n_rbc, rng, meshes, with_rare=True):
+    """ownership_model.scene for n_rbc RBCs (+ the rare cell) in a box: node
     positions (folded), cell index per node, nodes per cell."""
     import ownership_model as om
     rbc, rare = meshes
     pos, cell_of, sizes = [], [], []
-    for k, m in enumerate([rbc] * n_rbc + [rare]):
+    for k, m in enumerate([rbc] * n_rbc + ([rare] if with_rare else [])):
         lo = np.array([0.0, 5.0 + 4.0, 1.0 + (1.5 if k < n_rbc else 7.6)])
         hi = np.array([box[0], 35.0 - 4.0, box[2] - lo[2]])
         centre = rng.uniform(lo, np.maximum(hi, lo + 1e-9))
@@ -612,7 +619,8 @@ def measure_all(args, ranks_list):
                 for k in ranks_list:
                     keep(n, h, k, run_once(args, n, k, h, tmp))
     engine_after = engine(args.pyoif)
-    header = ("Measured: samples/cell_flow_in_bifurcation.py --full, "
+    header = ("Measured: samples/cell_flow_in_bifurcation.py --full"
+              f"{' --no-rare (no rare cell)' if args.no_rare else ' (with the rare cell)'}, "
               f"{args.cycles} x {args.steps} steps, least of {args.repeats}, OMP_NUM_THREADS={args.threads}; "
               f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after\n  "
               + engine_before + ("" if engine_after == engine_before else
@@ -641,6 +649,10 @@ def main():
     ap.add_argument("--stencil-share", type=float, default=0.3,
                     help="replicated share of the coupling where the measured engine spreads the particles "
                          "(fitted where it replicates them: 0.3 with 40 RBCs, 8113f59)")
+    ap.add_argument("--no-rare", action="store_true",
+                    help="the RBCs alone, without the sample's rare cell (the paper's Table 1; 0 RBCs: the fluid alone)")
+    ap.add_argument("--bind-to", choices=("auto", "core", "none"), default="auto",
+                    help="mpirun --bind-to (auto: core where the ranks fit on the cores, else none)")
     ap.add_argument("--mpirun", default="mpirun")
     ap.add_argument("--pyoif", default=os.path.join(ROOT, "build", "pyoif"))
     ap.add_argument("--csv", default="scaling.csv")
@@ -755,8 +767,8 @@ def main():
         grid2 = Grid((2, 1, 1), [[0, nodes[0], 2 * nodes[0]], [0, nodes[1]], [0, nodes[2]]], solid2.shape)
         for seed in range(args.seeds):
             rng = np.random.default_rng(seed)
-            scene = random_scene(box, n, rng, cell_meshes)
-            other = random_scene(box, n, rng, cell_meshes)
+            scene = random_scene(box, n, rng, cell_meshes, not args.no_rare)
+            other = random_scene(box, n, rng, cell_meshes, not args.no_rare)
             scenes.append(scene)
             weak_loads.append(rank_loads(grid2, solid2, (np.concatenate([scene[0], other[0] + [box[0], 0, 0]]),
                                                          np.concatenate([scene[1], other[1] + len(scene[2])]),
