@@ -42,7 +42,13 @@ public:
    *  positions at the last re-sort, null when a re-sort is due anyway (the
    *  structure is invalid or the particles changed). */
   const Vec3* displacement_reference(std::size_t n_local) const {
-    return m_valid && m_pos_at_rebuild.size() == n_local ? m_pos_at_rebuild.data() : nullptr;
+    if (!m_valid || m_pos_at_rebuild.size() != n_local)
+      return nullptr;
+    // no particles is a reference too (nothing can have moved): an empty
+    // list's data() may be null, which read "re-sort" at every step (under
+    // MPI a collective re-sort per step of a fluid without particles)
+    static const Vec3 no_particles = Vec3::Zero();
+    return n_local == 0 ? &no_particles : m_pos_at_rebuild.data();
   }
   /** Squared displacement since the last re-sort beyond which one is due. */
   double displacement_limit2() const { return 0.25 * skin * skin; }
