@@ -89,6 +89,23 @@ class Samples(unittest.TestCase):
         self.assertAlmostEqual(balance, 1.0, delta=0.01)
         self.assertGreater(os.path.getsize(os.path.join(folder, "device_trajectories.png")), 10000)
 
+    def test_bifurcation_flat_start(self):
+        """--orientation flat: 70 RBCs, more than random orientations fit
+        into the 14 um channel (64), seeded as discs parallel to the walls
+        over the whole channel; the haematocrit bookkeeping counts every
+        cell once (parent and branches, within 0.2 %)."""
+        run_sample("cell_flow_in_bifurcation.py", "--cells", "70", "--orientation", "flat", "--cycles", "1",
+                   "--steps", "10", "--output", "flat", "--no-plots", cwd=self.tmp.name)
+        folder = os.path.join(self.tmp.name, "flat")
+        scene = json.load(open(os.path.join(folder, "scene.json")))
+        self.assertEqual(scene["rbcs"], 70)
+        cells = [r for r in read_csv(os.path.join(folder, "cells.csv")) if float(r["time_ms"]) == 0.0]
+        self.assertEqual(len(cells), 70)
+        h = read_csv(os.path.join(folder, "haematocrit.csv"))[0]
+        counted = sum(float(h[k]) * scene["fluid_volume_um3"][k] for k in ("parent", "lower", "upper"))
+        self.assertAlmostEqual(counted / sum(float(r["volume_um3"]) for r in cells), 1.0, delta=2e-3)
+        self.assertGreater(float(h["lower"]) + float(h["upper"]), 0.0)  # seeded in the branches too
+
     def test_bifurcation(self):
         out = run_sample("cell_flow_in_bifurcation.py", "--cells", "4", "--cycles", "2", "--steps", "100",
                          "--output", "out", cwd=self.tmp.name)
