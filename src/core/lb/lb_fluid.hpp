@@ -653,8 +653,10 @@ private:
   struct HaloPeer {
     int rank = -1;
     std::vector<std::size_t> ghost, face;
-    std::vector<std::size_t> velocity_ghost, velocity_face; ///< nodes (coupling)
-    std::vector<std::uint32_t> velocity_slot; ///< m_ghost_velocity slot of each velocity_ghost
+    /// the coupling's ghost velocities: this rank's faces the neighbour
+    /// needs (nodes), and the m_ghost_velocity slot of each ghost it fills
+    std::vector<std::size_t> velocity_face;
+    std::vector<std::uint32_t> velocity_slot;
     mutable std::vector<double> send, recv;
     /// the population halo in single precision (MPI_FLOAT: half the bytes)
     mutable std::vector<float> send_single, recv_single;

@@ -615,7 +615,6 @@ void LBFluid::build_halo_pairs() {
             m_ghost_slot[ghost] = static_cast<std::uint32_t>(m_ghost_velocity.size());
             m_ghost_velocity.emplace_back(Vec3::Zero());
           }
-          in.velocity_ghost.push_back(ghost);
           in.velocity_slot.push_back(m_ghost_slot[ghost]);
         });
         visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, false,
@@ -691,7 +690,7 @@ void LBFluid::refresh_ghost_velocities() {
   std::vector<MPI_Request> requests;
   requests.reserve(2 * m_peers.size());
   for (const HaloPeer& peer : m_peers) {
-    peer.recv.resize(3 * peer.velocity_ghost.size());
+    peer.recv.resize(3 * peer.velocity_slot.size());
     requests.emplace_back();
     MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 72,
               m_grid.comm(), &requests.back());
