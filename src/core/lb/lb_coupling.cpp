@@ -63,13 +63,15 @@ inline bool not_here(const CompactStencil& s) {
   return (s.key & not_here_bit) != 0;
 }
 
-/** The stencil of pos; base_owned: its first node is this rank's (this rank
- *  gives the particle its force); base: that node's global coordinates. */
-inline CompactStencil compact_stencil(const LBFluid& fluid, const StencilFrame& frame,
-                                      const Vec3& pos, bool& base_owned, Vec3i& base) {
+/** s = the stencil of pos; base_owned: its first node is this rank's (this
+ *  rank gives the particle its force); base: that node's global coordinates.
+ *  (Written in place: a stencil built aside and copied into the ledger is
+ *  read back as one 32-byte load of four fresh 8-byte stores, a store-
+ *  forwarding stall per particle.) */
+inline void compact_stencil(const LBFluid& fluid, const StencilFrame& frame, const Vec3& pos,
+                            bool& base_owned, Vec3i& base, CompactStencil& s) {
   const double inv_agrid = 1.0 / fluid.agrid();
   int lo[3];
-  CompactStencil s;
   std::uint64_t wraps = 0;
   base_owned = true;
   for (int d = 0; d < 3; ++d) {
@@ -95,10 +97,9 @@ inline CompactStencil compact_stencil(const LBFluid& fluid, const StencilFrame& 
       s.key = not_here_bit |
               ((static_cast<std::uint64_t>(base[2]) * frame.global[1] + base[1]) * frame.global[0] +
                base[0]);
-      return s;
+      return;
     }
   s.key = (std::uint64_t{fluid.padded_index_in_box(lo[0], lo[1], lo[2])} << 3) | wraps;
-  return s;
 }
 
 } // namespace
@@ -112,7 +113,8 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
   const StencilFrame frame(fluid);
   bool base_owned = false;
   Vec3i base;
-  const CompactStencil s = compact_stencil(fluid, frame, box.folded(pos), base_owned, base);
+  CompactStencil s;
+  compact_stencil(fluid, frame, box.folded(pos), base_owned, base, s);
   Vec3 u = Vec3::Zero();
   if (base_owned) {
     const auto steps = fluid.stencil_steps();
@@ -201,7 +203,7 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
       throw_outside(p, box);
   }
   const bool split = frame.any_split;
-  auto mine = [&](std::size_t node) { return !split || fluid.is_domain_node(node); };
+  auto mine = [&](std::size_t node) { return !split || !fluid.is_stencil_ghost(node); };
   auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
@@ -291,10 +293,10 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
     const std::size_t i = particle(k);
     bool base_owned;
     Vec3i base;
-    const CompactStencil s = compact_stencil(fluid, frame, p.pos[i], base_owned, base);
-    const CompactStencil& old = stencils[i];
-    const bool moved = renumber || s.key != old.key;
-    stencils[i] = s;
+    CompactStencil& s = stencils[i];
+    const std::uint64_t old_key = s.key;
+    compact_stencil(fluid, frame, p.pos[i], base_owned, base, s);
+    const bool moved = renumber || s.key != old_key;
     if (split && (moved || giver[i] < 0))
       giver[i] = fluid.domain().owner_of(base);
     if (!moved || not_here(s))
@@ -322,7 +324,7 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
       for (std::uint64_t bits = needed[word]; bits; bits &= bits - 1)
         node_list[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
   }
-  fluid.compute_coupling_velocities();
+  fluid.compute_coupling_velocities(ledger.ghosts_pending);
   auto* const state = ledger.node_coupling.data();
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
@@ -388,17 +390,16 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   // its own nodes only, and the rank of a stencil's first node gives the
   // particle its force (a copy of that rank's value: exact). So every node
   // receives the serial deposits in the serial order, and every particle the
-  // serial force, bit for bit. The ghost-layer velocities come first, before
-  // anything can fail on one rank and not on another.
+  // serial force, bit for bit. A rank that fails before its ghost-layer
+  // velocities are sent sends none (its neighbours do not wait in vain).
   const StencilFrame frame(fluid);
   const bool split = frame.any_split;
-  // (no particles, no stencil reads them: every rank stores every particle,
-  // so all ranks skip this exchange alike; 8 % of a fluid-only step at 2
-  // ranks)
-  if (split && particles.n_local() > 0)
-    fluid.refresh_ghost_velocities();
-  const std::uint8_t* const current = distribution ? distribution->current : nullptr;
   auto& ledger = fluid.coupling_ledger();
+  // the ghost-layer velocities come from their owners in the velocity pass
+  // (no particles, no stencil reads them: every rank stores every particle,
+  // so all ranks skip that exchange alike)
+  ledger.ghosts_pending = split && particles.n_local() > 0;
+  const std::uint8_t* const current = distribution ? distribution->current : nullptr;
   auto& p = particles;
   const std::size_t n = p.n_local();
   const bool distributed = distribution && distribution->share;
@@ -409,6 +410,8 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   try {
     couple_on_this_rank(fluid, p, box, params, step, time_step, frame, listed, list_changed);
   } catch (...) {
+    if (ledger.ghosts_pending) // the neighbours wait for this rank's ghost velocities
+      fluid.exchange_coupling_ghosts(false);
     if (distributed) { // the other ranks wait for this one's part of the exchange
       ledger.coupling_force.assign(n, Vec3::Zero());
       ledger.giver.assign(n, -1);

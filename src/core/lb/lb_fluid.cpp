@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #ifdef PYOIF_WITH_OPENMP
 #include <omp.h>
@@ -844,7 +845,7 @@ void LBFluid::open_impulse_field() {
   m_field_used = true;
 }
 
-void LBFluid::compute_coupling_velocities() {
+void LBFluid::compute_coupling_velocities(bool exchange_ghosts) {
   // The 19 populations of a node lie in 19 streams far apart; the hardware
   // prefetchers do not follow a sparse walk through them, so the node
   // `ahead` places down the list is requested while this one is summed.
@@ -855,6 +856,10 @@ void LBFluid::compute_coupling_velocities() {
   m_ledger.node_coupling.resize(count);
   auto* out = m_ledger.node_coupling.data();
   const std::uint32_t* entry = m_ledger.compact.data();
+  // a fluid ghost's velocity comes from its owner: NaN until then, so that
+  // a ghost the owner did not send could not pass unnoticed
+  const bool from_owner = exchange_ghosts && !m_ghost_slot.empty();
+  const Vec3 not_yet = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   with_populations([&](const auto* populations) {
     for (std::size_t i = 0; i < count; ++i) {
       if (i + ahead < count) {
@@ -862,9 +867,13 @@ void LBFluid::compute_coupling_velocities() {
         for (int q = 0; q < Q; ++q)
           __builtin_prefetch(f + off[q], 0, 1);
       }
-      out[entry[nodes[i]]] = {coupling_velocity(nodes[i]), Vec3::Zero()};
+      const std::size_t n = nodes[i];
+      const bool ghost = from_owner && !m_flag[n] && m_ghost_slot[n] != no_ghost_slot;
+      out[entry[n]] = {ghost ? not_yet : coupling_velocity(n), Vec3::Zero()};
     }
   });
+  if (exchange_ghosts)
+    exchange_coupling_ghosts(true);
 }
 
 double LBFluid::total_mass() const {

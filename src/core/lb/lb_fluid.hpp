@@ -289,10 +289,14 @@ public:
   // --- particle coupling (lattice indices are padded node indices) -----------
   /** Padded index of a node given by local coordinates in [-1, n] (no folding). */
   std::size_t padded_index_in_box(int i, int j, int k) const { return index(i + 1, j + 1, k + 1); }
-  /** Whether padded index n is a node of this rank's subdomain (not a ghost). */
-  bool is_domain_node(std::size_t n) const {
-    const Vec3i pc = padded_coordinates(n);
-    return (pc.array() >= 1).all() && (pc.array() <= m_n.array()).all();
+  /** Whether padded index n, a node a coupling stencil reaches, is a ghost
+   *  (another rank's node): a table lookup, read for every node of every
+   *  coupling pass (the coordinates would cost three integer divisions).
+   *  A stencil reaches the ghost layer only across split axes (on the
+   *  others it wraps onto this rank's own nodes), where every ghost has a
+   *  velocity slot. */
+  bool is_stencil_ghost(std::size_t n) const {
+    return !m_ghost_slot.empty() && m_ghost_slot[n] != no_ghost_slot;
   }
   /** Collective: refreshes the velocities of the ghost-layer nodes from the
    *  ranks that own them, when the fluid changed since the last time (the
@@ -415,6 +419,10 @@ public:
     /// stencils are marked not here, their givers -1, forces and impulses 0
     std::vector<std::uint32_t> current_list;
     std::vector<std::uint8_t> current_mask;
+    /// decomposed lattice: this pass still owes its neighbours their
+    /// ghost-layer velocities (compute_coupling_velocities(true) sends them;
+    /// a pass that failed before sends none, so that no rank waits)
+    bool ghosts_pending = false;
   };
   CouplingLedger& coupling_ledger() {
     update_boundaries(); // a flagging may move the cuts, which resets the ledger
@@ -431,8 +439,20 @@ public:
   }
   /** For each node n of the ledger's list (`node`, mostly in increasing
    *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
-   *  with the populations of nodes further down the list prefetched. */
-  void compute_coupling_velocities();
+   *  with the populations of nodes further down the list prefetched.
+   *  exchange_ghosts (collective; a decomposed lattice with particles): the
+   *  fluid ghost-layer nodes of the list take their velocities from their
+   *  owners instead (exchange_coupling_ghosts). */
+  void compute_coupling_velocities(bool exchange_ghosts);
+  /** Collective, once per coupling pass on a decomposed lattice: sends each
+   *  neighbour the velocities of this rank's face nodes that its own list
+   *  holds (with_values; else nothing, for a pass that failed) and writes
+   *  those received into the list's ghost entries. A neighbour's particle
+   *  whose stencil reaches a ghost node of this rank touches that node's
+   *  owner's subdomain, so the owner keeps the particle current and lists
+   *  the node too: the owner's list covers every ghost the neighbour reads,
+   *  and no node list needs to be agreed on beforehand. */
+  void exchange_coupling_ghosts(bool with_values);
 
   // --- output -----------------------------------------------------------------
   /** Collective: rank 0 writes; an error there is raised on every rank. */
@@ -668,6 +688,7 @@ private:
   /// populations' 76 or more) because the coupling looks up every node it
   /// reads, at every step
   std::vector<std::uint32_t> m_ghost_slot;
+  std::vector<std::size_t> m_ghost_node; ///< slot -> padded index
   static constexpr std::uint32_t no_ghost_slot = ~std::uint32_t{0};
   std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
   mutable double m_halo_seconds = 0.0, m_coupling_exchange_seconds = 0.0;

@@ -552,6 +552,7 @@ void LBFluid::build_halo_pairs() {
   std::vector<PlaceRun> pairs;
   m_peers.clear();
   m_ghost_slot.clear();
+  m_ghost_node.clear();
   m_ghost_velocity.clear();
   m_ghost_velocity_version = ~std::uint64_t{0};
   auto peer = [&](int rank) -> HaloPeer& {
@@ -614,6 +615,7 @@ void LBFluid::build_halo_pairs() {
           if (m_ghost_slot[ghost] == no_ghost_slot) {
             m_ghost_slot[ghost] = static_cast<std::uint32_t>(m_ghost_velocity.size());
             m_ghost_velocity.emplace_back(Vec3::Zero());
+            m_ghost_node.push_back(ghost);
           }
           in.velocity_slot.push_back(m_ghost_slot[ghost]);
         });
@@ -711,6 +713,58 @@ void LBFluid::refresh_ghost_velocities() {
       m_ghost_velocity[peer.velocity_slot[i]] =
           Vec3(peer.recv[3 * i], peer.recv[3 * i + 1], peer.recv[3 * i + 2]);
   m_ghost_velocity_version = m_state_version;
+  m_coupling_exchange_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void LBFluid::exchange_coupling_ghosts(bool with_values) {
+  m_ledger.ghosts_pending = false;
+  if (m_peers.empty())
+    return;
+  const auto start = std::chrono::steady_clock::now();
+  const std::uint64_t* needed = m_ledger.needed.data();
+  const std::uint32_t* entry = m_ledger.compact.data();
+  auto* state = m_ledger.node_coupling.data();
+  auto listed = [needed](std::size_t n) { return ((needed[n >> 6] >> (n & 63)) & 1) != 0; };
+  // per node sent: its place in the peer's velocity list, then the velocity
+  // (4 doubles; the place is exact in a double)
+  constexpr std::size_t per = 4;
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * m_peers.size());
+  for (const HaloPeer& peer : m_peers) {
+    peer.recv.resize(per * peer.velocity_slot.size());
+    requests.emplace_back();
+    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 73,
+              m_grid.comm(), &requests.back());
+  }
+  for (const HaloPeer& peer : m_peers) {
+    peer.send.clear();
+    if (with_values)
+      for (std::size_t i = 0; i < peer.velocity_face.size(); ++i) {
+        const std::size_t n = peer.velocity_face[i];
+        if (!listed(n))
+          continue;
+        const Vec3& u = state[entry[n]].velocity;
+        peer.send.insert(peer.send.end(), {static_cast<double>(i), u[0], u[1], u[2]});
+      }
+    requests.emplace_back();
+    MPI_Isend(peer.send.data(), static_cast<int>(peer.send.size()), MPI_DOUBLE, peer.rank, 73,
+              m_grid.comm(), &requests.back());
+  }
+  std::vector<MPI_Status> statuses(requests.size());
+  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  if (with_values)
+    for (std::size_t k = 0; k < m_peers.size(); ++k) {
+      const HaloPeer& peer = m_peers[k];
+      int received = 0;
+      MPI_Get_count(&statuses[k], MPI_DOUBLE, &received);
+      for (std::size_t j = 0; j + per <= static_cast<std::size_t>(received); j += per) {
+        const std::size_t n =
+            m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(peer.recv[j])]];
+        if (!m_flag[n] && listed(n))
+          state[entry[n]].velocity = Vec3(peer.recv[j + 1], peer.recv[j + 2], peer.recv[j + 3]);
+      }
+    }
   m_coupling_exchange_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
