@@ -157,6 +157,57 @@ class ShapeConstraintForces(unittest.TestCase):
         np.testing.assert_array_equal(other.f, [0, 0, 0])
         np.testing.assert_allclose(c.total_force(), -total, rtol=RTOL)
 
+    def test_runs_of_particles_near_and_far(self):
+        """The constraints skip runs of consecutive particles whose box is
+        farther than the range from a bounded shape's box: particles near
+        one of two spheres, near the other, alternating, and far from both
+        (runs of each kind, and runs that mix them) must each feel the
+        analytic forces of both spheres (zero beyond the range)."""
+        rng = np.random.default_rng(7)
+        centres = np.array([[3.5, 3.5, 3.5], [6.5, 6.5, 6.5]])
+        radius = 0.5
+        constraints = [self.add(shapes.Sphere(center=centre, radius=radius)) for centre in centres]
+
+        def force_from(k, pos):
+            r = pos - centres[k]
+            d = np.linalg.norm(r) - radius
+            return soft_sphere_force(d) * r / np.linalg.norm(r) if d < CUTOFF + OFFSET else 0 * r
+
+        # runs of 32 consecutive particles (the run the constraints test as a
+        # whole) in patches, as a membrane's nodes lie: each near one sphere,
+        # along an axis (the run's box as far from the sphere's as the
+        # particles themselves) or a random direction, within or beyond the
+        # range; then a run alternating between the spheres and one far from
+        # both (3.3 or more)
+        patches = [(k, axis * sign, d) for k in (0, 1) for axis in np.eye(3) for sign in (1, -1)
+                   for d in (0.6, 1.5, 2.4, 2.9)] + [(k, None, d) for k in (0, 1) for d in (0.8, 2.0)]
+        parts, expected = [], []
+
+        def place(pos):
+            parts.append(self.system.part.add(pos=pos, type=0))
+            expected.append([force_from(0, pos), force_from(1, pos)])
+
+        for k, direction, d in patches:
+            if direction is None:
+                direction = rng.normal(size=3)
+            for _ in range(32):
+                e = direction + 0.05 * rng.normal(size=3)
+                e /= np.linalg.norm(e)
+                place(centres[k] + (radius + d + rng.uniform(-0.05, 0.05)) * e)
+        for k in [0, 1] * 16:
+            e = rng.normal(size=3)
+            place(centres[k] + (radius + rng.uniform(0.5, 2.9)) * e / np.linalg.norm(e))
+        for _ in range(32):
+            place(np.array([3.0, 7.0, 5.0]) + 0.01 * rng.normal(size=3))
+        expected = np.array(expected)
+        self.system.integrator.run(0, recalc_forces=True)
+        for p, f in zip(parts, expected):
+            np.testing.assert_allclose(p.f, f.sum(axis=0), rtol=1e-10, atol=1e-12)
+        self.assertTrue(np.all(np.any(expected != 0, axis=2).sum(axis=0) > 20))  # both act
+        self.assertTrue(np.all(expected[-32:] == 0))
+        for k, c in enumerate(constraints):
+            np.testing.assert_allclose(c.total_force(), -expected[:, k].sum(axis=0), rtol=1e-10)
+
     def test_penetration(self):
         # inside point, its (negative) distance and the outward normal there, by hand
         inside_points = {

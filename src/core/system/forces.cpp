@@ -239,52 +239,95 @@ void System::add_constraint_forces(Energies* e) {
   const Vec3* eval_pos = own ? owned_pos.data() : p.pos.data();
   std::vector<double>& dist = m_constraint_dist;
   dist.resize(n_eval);
+  // A bounded shape (a block, a cylinder, a union of them) is far from most
+  // particles: per run of `chunk` consecutive particles (a cell's nodes are
+  // contiguous, so a run is a patch of a membrane) the box around them is
+  // tested against the shape's box, and a run farther than the range from
+  // it is skipped. The shape's distance is at least the distance between
+  // the boxes (Shape::bounding_box), so the skipped particles are exactly
+  // some of those the range test below passes over: the same forces,
+  // summed in the same order. A run with a position that is not finite has
+  // no box and is always evaluated (the error names it as before).
+  constexpr std::size_t chunk = 32;
+  const std::size_t n_chunks = (n_eval + chunk - 1) / chunk;
+  std::vector<Vec3>& chunk_lo = m_constraint_chunk_lo;
+  std::vector<Vec3>& chunk_hi = m_constraint_chunk_hi;
+  chunk_lo.resize(n_chunks);
+  chunk_hi.resize(n_chunks);
+  for (std::size_t r = 0; r < n_chunks; ++r) {
+    const std::size_t begin = r * chunk, end = std::min(n_eval, begin + chunk);
+    Vec3 lo = eval_pos[begin], hi = lo, sum = Vec3::Zero();
+    for (std::size_t k = begin; k < end; ++k) {
+      lo = lo.cwiseMin(eval_pos[k]);
+      hi = hi.cwiseMax(eval_pos[k]);
+      sum += eval_pos[k]; // not finite if any coordinate is not
+    }
+    if (!sum.allFinite()) {
+      lo = Vec3::Constant(-HUGE_VAL);
+      hi = Vec3::Constant(HUGE_VAL);
+    }
+    chunk_lo[r] = lo;
+    chunk_hi[r] = hi;
+  }
   for (auto& constraint : m_constraints) {
     constraint->total_force.setZero();
-    // all distances in one call (a tight loop for walls; bounded shapes skip
-    // the exact distance of particles farther than the range from their
-    // bounding box), the force where a particle is within its pair's range
-    constraint->shape->signed_distances(eval_pos, n_eval, range, dist.data());
-    for (std::size_t k = 0; k < n_eval; ++k) {
-      if (dist[k] >= range)
-        continue;
-      const std::size_t i = own ? owned_index[k] : k;
-      const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
-      if (!params)
-        continue;
-      if (dist[k] > 0.0) {
-        if (dist[k] >= params->range)
-          continue;
-      } else if (constraint->penetrable) {
-        // inside a penetrable shape: as in ESPResSo, the interaction at the
-        // mirrored distance -dist, along the same vector dist * normal (so a
-        // repulsion pushes the particle deeper in, away from the surface),
-        // unless only_positive
-        if (constraint->only_positive || !(dist[k] < 0.0) || -dist[k] >= params->range)
-          continue;
-      } else {
-        std::ostringstream msg;
-        msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
-            << ") penetrated the non-penetrable " << constraint->shape->name()
-            << " constraint (signed distance " << dist[k] << ") at time " << time
-            << "; at the start of a run this means it was placed inside: check the initial "
-               "positions; later, strengthen the node-wall interaction or reduce the time step";
-        throw SimulationInstability("wall_penetration", msg.str())
-            .at_particle(p.id[i])
-            .in_cell(p.mol_id[i])
-            .at_time(time)
-            .with_value(dist[k]);
+    Vec3 shape_lo, shape_hi;
+    const bool bounded = constraint->shape->bounding_box(shape_lo, shape_hi);
+    for (std::size_t r = 0; r < n_chunks; ++r) {
+      const std::size_t begin = r * chunk, end = std::min(n_eval, begin + chunk);
+      if (bounded) {
+        const Vec3 gap =
+            (shape_lo - chunk_hi[r]).cwiseMax(chunk_lo[r] - shape_hi).cwiseMax(Vec3::Zero());
+        if (gap.norm() >= range)
+          continue; // every particle of the run is farther than the range
       }
-      double exact;
-      Vec3 normal;
-      constraint->shape->calc_dist(p.pos[i], exact, normal);
-      c.d = exact * normal;
-      c.dist = std::abs(exact);
-      c.mol_i = p.mol_id[i];
-      c.normal_i = p.normal[i];
-      const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
-      p.force[i] += f;
-      constraint->total_force -= f;
+      // the run's distances in one call (a tight loop for walls; bounded
+      // shapes skip the exact distance of particles farther than the range
+      // from their box), the force where a particle is within its pair's
+      // range
+      constraint->shape->signed_distances(eval_pos + begin, end - begin, range,
+                                          dist.data() + begin);
+      for (std::size_t k = begin; k < end; ++k) {
+        if (dist[k] >= range)
+          continue;
+        const std::size_t i = own ? owned_index[k] : k;
+        const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
+        if (!params)
+          continue;
+        if (dist[k] > 0.0) {
+          if (dist[k] >= params->range)
+            continue;
+        } else if (constraint->penetrable) {
+          // inside a penetrable shape: as in ESPResSo, the interaction at the
+          // mirrored distance -dist, along the same vector dist * normal (so
+          // a repulsion pushes the particle deeper in, away from the
+          // surface), unless only_positive
+          if (constraint->only_positive || !(dist[k] < 0.0) || -dist[k] >= params->range)
+            continue;
+        } else {
+          std::ostringstream msg;
+          msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
+              << ") penetrated the non-penetrable " << constraint->shape->name()
+              << " constraint (signed distance " << dist[k] << ") at time " << time
+              << "; at the start of a run this means it was placed inside: check the initial "
+                 "positions; later, strengthen the node-wall interaction or reduce the time step";
+          throw SimulationInstability("wall_penetration", msg.str())
+              .at_particle(p.id[i])
+              .in_cell(p.mol_id[i])
+              .at_time(time)
+              .with_value(dist[k]);
+        }
+        double exact;
+        Vec3 normal;
+        constraint->shape->calc_dist(p.pos[i], exact, normal);
+        c.d = exact * normal;
+        c.dist = std::abs(exact);
+        c.mol_i = p.mol_id[i];
+        c.normal_i = p.normal[i];
+        const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
+        p.force[i] += f;
+        constraint->total_force -= f;
+      }
     }
   }
   if (e)

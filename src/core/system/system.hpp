@@ -343,6 +343,9 @@ private:
   /// spread over ranks: this rank's particles' positions and local indices
   std::vector<Vec3> m_constraint_pos;
   std::vector<std::size_t> m_constraint_index;
+  /// the bounding boxes of runs of constraint_chunk evaluated particles
+  /// (lower, upper corner; NaN-free or marked unbounded by lo = -inf)
+  std::vector<Vec3> m_constraint_chunk_lo, m_constraint_chunk_hi;
   std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;
