@@ -229,8 +229,8 @@ void System::add_constraint_forces(Energies* e) {
   if (own) {
     owned_pos.clear();
     owned_index.clear();
-    for (std::size_t i = 0; i < p.n_local(); ++i)
-      if (own[i]) {
+    for (const auto& [first, end] : owned_runs())
+      for (std::size_t i = first; i < end; ++i) {
         owned_pos.push_back(p.pos[i]);
         owned_index.push_back(i);
       }
@@ -340,19 +340,17 @@ void System::add_langevin_forces() {
   const double noise = std::sqrt(2.0 * gamma * m_langevin.kT / m_time_step);
   const random::Key key{m_langevin.seed, static_cast<std::uint64_t>(random::Stream::langevin),
                         step_count, 0};
-  const std::uint8_t* own = owned_mask();
-  for (std::size_t i = 0; i < p.n_local(); ++i) {
-    if (own && !own[i])
-      continue;
-    Vec3 f = -gamma * p.vel[i];
-    if (noise > 0.0) {
-      random::Key k = key;
-      k.key = static_cast<std::uint64_t>(p.id[i]);
-      for (int d = 0; d < 3; ++d)
-        f[d] += noise * random::normal(k, d);
+  for (const auto& [first, end] : owned_runs())
+    for (std::size_t i = first; i < end; ++i) {
+      Vec3 f = -gamma * p.vel[i];
+      if (noise > 0.0) {
+        random::Key k = key;
+        k.key = static_cast<std::uint64_t>(p.id[i]);
+        for (int d = 0; d < 3; ++d)
+          f[d] += noise * random::normal(k, d);
+      }
+      p.force[i] += f;
     }
-    p.force[i] += f;
-  }
 }
 
 template <bool with_energy>
@@ -568,42 +566,40 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     const double h0 = n > 0 ? half_kick[0] : 0.0;
     double worst2 = 0.0, step2 = 0.0;
     bool runaway = false;
-    // spread over the ranks: the particles this rank integrates (the mask
-    // changes at re-sorts)
-    const std::uint8_t* own = owned_mask();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (own && !own[i]) // another rank's particle
-        continue;
-      const double h = decltype(uniform)::value ? h0 : half_kick[i];
-      const Vec3 f = p.force[i];
-      Vec3 v = p.vel[i];
-      Vec3 x = p.pos[i];
-      if (!any_fixed) {
-        for (int k = 0; k < n_kicks; ++k)
-          v += h * f;
-        x += dt * v;
-      } else {
-        for (int d = 0; d < 3; ++d) {
-          if (p.fixed[i] & (1u << d))
-            continue; // neither kicked nor moved
+    // spread over the ranks: the particles this rank integrates (runs of
+    // them, made anew when they change, at re-sorts)
+    for (const auto& [first, end] : owned_runs())
+      for (std::size_t i = first; i < end; ++i) {
+        const double h = decltype(uniform)::value ? h0 : half_kick[i];
+        const Vec3 f = p.force[i];
+        Vec3 v = p.vel[i];
+        Vec3 x = p.pos[i];
+        if (!any_fixed) {
           for (int k = 0; k < n_kicks; ++k)
-            v[d] += h * f[d];
-          x[d] += dt * v[d];
+            v += h * f;
+          x += dt * v;
+        } else {
+          for (int d = 0; d < 3; ++d) {
+            if (p.fixed[i] & (1u << d))
+              continue; // neither kicked nor moved
+            for (int k = 0; k < n_kicks; ++k)
+              v[d] += h * f[d];
+            x[d] += dt * v[d];
+          }
         }
+        step2 = std::max(step2, (x - p.pos[i]).squaredNorm());
+        p.vel[i] = v;
+        p.pos[i] = x;
+        if constexpr (n_kicks == 2) {
+          if constexpr (decltype(external)::value)
+            p.force[i] = p.ext_force[i];
+          else
+            p.force[i].setZero();
+        }
+        if (x0)
+          worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
+        runaway |= cells.runaway(x);
       }
-      step2 = std::max(step2, (x - p.pos[i]).squaredNorm());
-      p.vel[i] = v;
-      p.pos[i] = x;
-      if constexpr (n_kicks == 2) {
-        if constexpr (decltype(external)::value)
-          p.force[i] = p.ext_force[i];
-        else
-          p.force[i].setZero();
-      }
-      if (x0)
-        worst2 = std::max(worst2, (x - x0[i]).squaredNorm());
-      runaway |= cells.runaway(x);
-    }
     if (step2 > step_limit2 && !runaway) {
       if (m_spread.active)
         return -3;                              // raised on every rank in prepare_step
@@ -619,9 +615,8 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
     return any_external ? advance_with(kicks, no{}, yes{}) : advance_with(kicks, no{}, no{});
   };
   auto second_kick = [&] {
-    const std::uint8_t* own = owned_mask();
-    for (std::size_t i = 0; i < n; ++i)
-      if (!own || own[i])
+    for (const auto& [first, end] : owned_runs())
+      for (std::size_t i = first; i < end; ++i)
         for (int d = 0; d < 3; ++d)
           if (!(p.fixed[i] & (1u << d)))
             p.vel[i][d] += half_kick[i] * p.force[i][d];

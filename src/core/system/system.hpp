@@ -244,10 +244,21 @@ public:
                ? m_spread.owned.data()
                : nullptr;
   }
+  /** The particles this rank integrates as runs [first, second) of
+   *  consecutive local indices, ascending (all: one run). Made anew when the
+   *  owned mask changes (one comparison of it per call, as cheap as a pass
+   *  that skips through it): the per-step passes (Verlet, walls) then do
+   *  no work for the other ranks' particles. */
+  const std::vector<std::pair<std::size_t, std::size_t>>& owned_runs();
   /** Ranks of the particles' spread (the world under a decomposed fluid). */
   const Communicator& spread_comm() const { return m_spread.comm; }
 
 private:
+  /// owned_runs() and the mask it was made from (empty: all particles)
+  std::vector<std::pair<std::size_t, std::size_t>> m_owned_runs;
+  std::vector<std::uint8_t> m_owned_runs_mask;
+  std::size_t m_owned_runs_n = ~std::size_t{0};
+
   /** The spread of the particles (particles_spread()). */
   struct Spread {
     bool active = false;

@@ -185,6 +185,37 @@ void System::assign_owners() {
   m_spread.cuts = grid.cuts();
 }
 
+const std::vector<std::pair<std::size_t, std::size_t>>& System::owned_runs() {
+  const std::size_t n = particles.n_local();
+  const std::uint8_t* own = owned_mask();
+  const bool same =
+      m_owned_runs_n == n &&
+      (own ? m_owned_runs_mask.size() == n && std::equal(own, own + n, m_owned_runs_mask.begin())
+           : m_owned_runs_mask.empty());
+  if (same)
+    return m_owned_runs;
+  m_owned_runs_n = n;
+  m_owned_runs.clear();
+  if (!own) {
+    m_owned_runs_mask.clear();
+    if (n > 0)
+      m_owned_runs.emplace_back(0, n);
+    return m_owned_runs;
+  }
+  m_owned_runs_mask.assign(own, own + n);
+  for (std::size_t i = 0; i < n;) {
+    if (!own[i]) {
+      ++i;
+      continue;
+    }
+    const std::size_t first = i;
+    while (i < n && own[i])
+      ++i;
+    m_owned_runs.emplace_back(first, i);
+  }
+  return m_owned_runs;
+}
+
 void System::build_exchange_lists() {
   auto& p = particles;
   const std::size_t n = p.n_local();
