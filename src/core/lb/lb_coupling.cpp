@@ -324,7 +324,7 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
       for (std::uint64_t bits = needed[word]; bits; bits &= bits - 1)
         node_list[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
   }
-  fluid.compute_coupling_velocities(ledger.ghosts_pending);
+  fluid.compute_coupling_velocities();
   auto* const state = ledger.node_coupling.data();
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;

@@ -845,7 +845,7 @@ void LBFluid::open_impulse_field() {
   m_field_used = true;
 }
 
-void LBFluid::compute_coupling_velocities(bool exchange_ghosts) {
+void LBFluid::compute_coupling_velocities() {
   // The 19 populations of a node lie in 19 streams far apart; the hardware
   // prefetchers do not follow a sparse walk through them, so the node
   // `ahead` places down the list is requested while this one is summed.
@@ -858,7 +858,6 @@ void LBFluid::compute_coupling_velocities(bool exchange_ghosts) {
   const std::uint32_t* entry = m_ledger.compact.data();
   // a fluid ghost's velocity comes from its owner: NaN until then, so that
   // a ghost the owner did not send could not pass unnoticed
-  const bool from_owner = exchange_ghosts && !m_ghost_slot.empty();
   const Vec3 not_yet = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   with_populations([&](const auto* populations) {
     for (std::size_t i = 0; i < count; ++i) {
@@ -868,11 +867,10 @@ void LBFluid::compute_coupling_velocities(bool exchange_ghosts) {
           __builtin_prefetch(f + off[q], 0, 1);
       }
       const std::size_t n = nodes[i];
-      const bool ghost = from_owner && !m_flag[n] && m_ghost_slot[n] != no_ghost_slot;
-      out[entry[n]] = {ghost ? not_yet : coupling_velocity(n), Vec3::Zero()};
+      out[entry[n]] = {is_fluid_ghost(n) ? not_yet : velocity_at_index(n), Vec3::Zero()};
     }
   });
-  if (exchange_ghosts)
+  if (m_ledger.ghosts_pending)
     exchange_coupling_ghosts(true);
 }
 

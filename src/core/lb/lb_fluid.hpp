@@ -298,6 +298,9 @@ public:
   bool is_stencil_ghost(std::size_t n) const {
     return !m_ghost_slot.empty() && m_ghost_slot[n] != no_ghost_slot;
   }
+  /** A fluid ghost node: its velocity is its owner's (a solid one's is the
+   *  boundary's, known here). */
+  bool is_fluid_ghost(std::size_t n) const { return !m_flag[n] && is_stencil_ghost(n); }
   /** Collective: refreshes the velocities of the ghost-layer nodes from the
    *  ranks that own them, when the fluid changed since the last time (the
    *  coupling's stencils reach one node into the ghost layer). */
@@ -305,7 +308,7 @@ public:
   /** Velocity (MD units) at padded index n, ghost nodes of a decomposed
    *  lattice included (from refresh_ghost_velocities). */
   Vec3 coupling_velocity(std::size_t n) const {
-    if (!m_flag[n] && !m_ghost_slot.empty() && m_ghost_slot[n] != no_ghost_slot)
+    if (is_fluid_ghost(n))
       return m_ghost_velocity[m_ghost_slot[n]];
     return velocity_at_index(n);
   }
@@ -420,8 +423,8 @@ public:
     std::vector<std::uint32_t> current_list;
     std::vector<std::uint8_t> current_mask;
     /// decomposed lattice: this pass still owes its neighbours their
-    /// ghost-layer velocities (compute_coupling_velocities(true) sends them;
-    /// a pass that failed before sends none, so that no rank waits)
+    /// ghost-layer velocities (compute_coupling_velocities sends them; a
+    /// pass that failed before sends none, so that no rank waits)
     bool ghosts_pending = false;
   };
   CouplingLedger& coupling_ledger() {
@@ -439,11 +442,11 @@ public:
   }
   /** For each node n of the ledger's list (`node`, mostly in increasing
    *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
-   *  with the populations of nodes further down the list prefetched.
-   *  exchange_ghosts (collective; a decomposed lattice with particles): the
-   *  fluid ghost-layer nodes of the list take their velocities from their
-   *  owners instead (exchange_coupling_ghosts). */
-  void compute_coupling_velocities(bool exchange_ghosts);
+   *  with the populations of nodes further down the list prefetched. On a
+   *  decomposed lattice the fluid ghost nodes of the list take their
+   *  velocities from their owners instead (collective while the ledger's
+   *  ghosts_pending: exchange_coupling_ghosts). */
+  void compute_coupling_velocities();
   /** Collective, once per coupling pass on a decomposed lattice: sends each
    *  neighbour the velocities of this rank's face nodes that its own list
    *  holds (with_values; else nothing, for a pass that failed) and writes

@@ -761,7 +761,7 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
       for (std::size_t j = 0; j + per <= static_cast<std::size_t>(received); j += per) {
         const std::size_t n =
             m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(peer.recv[j])]];
-        if (!m_flag[n] && listed(n))
+        if (is_fluid_ghost(n) && listed(n))
           state[entry[n]].velocity = Vec3(peer.recv[j + 1], peer.recv[j + 2], peer.recv[j + 3]);
       }
     }

@@ -219,65 +219,46 @@ void System::add_constraint_forces(Energies* e) {
   c.normal_j = Vec3::Zero();
   // the largest range of any pair: beyond it no constraint acts
   const double range = nonbonded.max_range();
-  // spread over ranks: this rank's particles only (distances and the
-  // loop below: a pass over every stored particle per shape cost as much
-  // as the walls' own work at 2 ranks), in ascending local index as one
-  // rank goes, so each wall's total force sums in the serial order
-  const std::uint8_t* own = owned_mask();
-  std::vector<std::size_t>& owned_index = m_constraint_index;
-  std::vector<Vec3>& owned_pos = m_constraint_pos;
-  if (own) {
-    owned_pos.clear();
-    owned_index.clear();
-    for (const auto& [first, end] : owned_runs())
-      for (std::size_t i = first; i < end; ++i) {
-        owned_pos.push_back(p.pos[i]);
-        owned_index.push_back(i);
-      }
-  }
-  const std::size_t n_eval = own ? owned_index.size() : p.n_local();
-  const Vec3* eval_pos = own ? owned_pos.data() : p.pos.data();
-  std::vector<double>& dist = m_constraint_dist;
-  dist.resize(n_eval);
+  // Spread over ranks: this rank's particles only (a pass over every stored
+  // particle per shape cost as much as the walls' own work at 2 ranks), in
+  // ascending local index as one rank goes, so each wall's total force sums
+  // in the serial order.
   // A bounded shape (a block, a cylinder, a union of them) is far from most
-  // particles: per run of `chunk` consecutive particles (a cell's nodes are
-  // contiguous, so a run is a patch of a membrane) the box around them is
-  // tested against the shape's box, and a run farther than the range from
-  // it is skipped. The shape's distance is at least the distance between
-  // the boxes (Shape::bounding_box), so the skipped particles are exactly
-  // some of those the range test below passes over: the same forces,
-  // summed in the same order. A run with a position that is not finite has
-  // no box and is always evaluated (the error names it as before).
+  // particles: per run of up to `chunk` consecutive particles (a cell's
+  // nodes are contiguous, so a run is a patch of a membrane) the box around
+  // them is tested against the shape's box, and a run farther than the
+  // range from it is skipped. The shape's distance is at least the distance
+  // between the boxes (Shape::bounding_box), so the skipped particles are
+  // some of those the range test below passes over: the same forces, summed
+  // in the same order. A run with a position that is not finite has no box
+  // and is always evaluated (the error names it as before).
   constexpr std::size_t chunk = 32;
-  const std::size_t n_chunks = (n_eval + chunk - 1) / chunk;
-  std::vector<Vec3>& chunk_lo = m_constraint_chunk_lo;
-  std::vector<Vec3>& chunk_hi = m_constraint_chunk_hi;
-  chunk_lo.resize(n_chunks);
-  chunk_hi.resize(n_chunks);
-  for (std::size_t r = 0; r < n_chunks; ++r) {
-    const std::size_t begin = r * chunk, end = std::min(n_eval, begin + chunk);
-    Vec3 lo = eval_pos[begin], hi = lo, sum = Vec3::Zero();
-    for (std::size_t k = begin; k < end; ++k) {
-      lo = lo.cwiseMin(eval_pos[k]);
-      hi = hi.cwiseMax(eval_pos[k]);
-      sum += eval_pos[k]; // not finite if any coordinate is not
+  std::vector<ConstraintChunk>& chunks = m_constraint_chunks;
+  chunks.clear();
+  for (const auto& [first, last] : owned_runs())
+    for (std::size_t begin = first; begin < last; begin += chunk) {
+      ConstraintChunk r{begin, std::min(last, begin + chunk), p.pos[begin], p.pos[begin]};
+      Vec3 sum = Vec3::Zero();
+      for (std::size_t i = r.begin; i < r.end; ++i) {
+        r.lo = r.lo.cwiseMin(p.pos[i]);
+        r.hi = r.hi.cwiseMax(p.pos[i]);
+        sum += p.pos[i]; // not finite if any coordinate is not
+      }
+      if (!sum.allFinite()) {
+        r.lo = Vec3::Constant(-HUGE_VAL);
+        r.hi = Vec3::Constant(HUGE_VAL);
+      }
+      chunks.push_back(r);
     }
-    if (!sum.allFinite()) {
-      lo = Vec3::Constant(-HUGE_VAL);
-      hi = Vec3::Constant(HUGE_VAL);
-    }
-    chunk_lo[r] = lo;
-    chunk_hi[r] = hi;
-  }
+  std::vector<double>& dist = m_constraint_dist;
+  dist.resize(p.n_local());
   for (auto& constraint : m_constraints) {
     constraint->total_force.setZero();
     Vec3 shape_lo, shape_hi;
     const bool bounded = constraint->shape->bounding_box(shape_lo, shape_hi);
-    for (std::size_t r = 0; r < n_chunks; ++r) {
-      const std::size_t begin = r * chunk, end = std::min(n_eval, begin + chunk);
+    for (const ConstraintChunk& r : chunks) {
       if (bounded) {
-        const Vec3 gap =
-            (shape_lo - chunk_hi[r]).cwiseMax(chunk_lo[r] - shape_hi).cwiseMax(Vec3::Zero());
+        const Vec3 gap = (shape_lo - r.hi).cwiseMax(r.lo - shape_hi).cwiseMax(Vec3::Zero());
         if (gap.norm() >= range)
           continue; // every particle of the run is farther than the range
       }
@@ -285,37 +266,37 @@ void System::add_constraint_forces(Energies* e) {
       // shapes skip the exact distance of particles farther than the range
       // from their box), the force where a particle is within its pair's
       // range
-      constraint->shape->signed_distances(eval_pos + begin, end - begin, range,
-                                          dist.data() + begin);
-      for (std::size_t k = begin; k < end; ++k) {
-        if (dist[k] >= range)
+      constraint->shape->signed_distances(p.pos.data() + r.begin, r.end - r.begin, range,
+                                          dist.data() + r.begin);
+      for (std::size_t i = r.begin; i < r.end; ++i) {
+        const double d = dist[i];
+        if (d >= range)
           continue;
-        const std::size_t i = own ? owned_index[k] : k;
         const PairParams* params = nonbonded.find(p.type[i], constraint->particle_type);
         if (!params)
           continue;
-        if (dist[k] > 0.0) {
-          if (dist[k] >= params->range)
+        if (d > 0.0) {
+          if (d >= params->range)
             continue;
         } else if (constraint->penetrable) {
           // inside a penetrable shape: as in ESPResSo, the interaction at the
           // mirrored distance -dist, along the same vector dist * normal (so
           // a repulsion pushes the particle deeper in, away from the
           // surface), unless only_positive
-          if (constraint->only_positive || !(dist[k] < 0.0) || -dist[k] >= params->range)
+          if (constraint->only_positive || !(d < 0.0) || -d >= params->range)
             continue;
         } else {
           std::ostringstream msg;
           msg << "particle " << p.id[i] << " at (" << p.pos[i].transpose()
               << ") penetrated the non-penetrable " << constraint->shape->name()
-              << " constraint (signed distance " << dist[k] << ") at time " << time
+              << " constraint (signed distance " << d << ") at time " << time
               << "; at the start of a run this means it was placed inside: check the initial "
                  "positions; later, strengthen the node-wall interaction or reduce the time step";
           throw SimulationInstability("wall_penetration", msg.str())
               .at_particle(p.id[i])
               .in_cell(p.mol_id[i])
               .at_time(time)
-              .with_value(dist[k]);
+              .with_value(d);
         }
         double exact;
         Vec3 normal;

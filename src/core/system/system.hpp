@@ -245,26 +245,25 @@ public:
                : nullptr;
   }
   /** The particles this rank integrates as runs [first, second) of
-   *  consecutive local indices, ascending (all: one run). Made anew when the
-   *  owned mask changes (one comparison of it per call, as cheap as a pass
-   *  that skips through it): the per-step passes (Verlet, walls) then do
-   *  no work for the other ranks' particles. */
-  const std::vector<std::pair<std::size_t, std::size_t>>& owned_runs();
+   *  consecutive local indices, ascending (all particles: one run). Made
+   *  with the owned mask, at the assignments of owners: the per-step passes
+   *  (Verlet, Langevin, walls) then do no work for other ranks' particles. */
+  const std::vector<std::pair<std::size_t, std::size_t>>& owned_runs() const;
   /** Ranks of the particles' spread (the world under a decomposed fluid). */
   const Communicator& spread_comm() const { return m_spread.comm; }
 
 private:
-  /// owned_runs() and the mask it was made from (empty: all particles)
-  std::vector<std::pair<std::size_t, std::size_t>> m_owned_runs;
-  std::vector<std::uint8_t> m_owned_runs_mask;
-  std::size_t m_owned_runs_n = ~std::size_t{0};
+  /// owned_runs() where every particle is this rank's: [0, n), or none
+  mutable std::vector<std::pair<std::size_t, std::size_t>> m_all_particles_run;
 
   /** The spread of the particles (particles_spread()). */
   struct Spread {
     bool active = false;
     Communicator comm{MPI_COMM_SELF};
-    std::vector<int> owner;            ///< per local index (-1: current everywhere)
-    std::vector<std::uint8_t> owned;   ///< owner == this rank (or -1)
+    std::vector<int> owner;          ///< per local index (-1: current everywhere)
+    std::vector<std::uint8_t> owned; ///< owner == this rank (or -1)
+    /// the runs of consecutive owned particles (owned_runs), with `owned`
+    std::vector<std::pair<std::size_t, std::size_t>> owned_runs;
     std::vector<std::uint8_t> current; ///< owned or received every step
     struct Peer {
       int rank;
@@ -296,6 +295,8 @@ private:
   void update_topology();
   /** Owners from the current state (all ranks alike), before a re-sort. */
   void assign_owners();
+  /** Spread.owned from Spread.owner, its runs, and the version when it changed. */
+  void set_owned();
   /** The point-to-point lists, after the re-sort. */
   void build_exchange_lists();
   /** A re-sort that moves only the particles that change owner and those
@@ -351,12 +352,13 @@ private:
   }
   /// per particle evaluated (spread over ranks: this rank's), one constraint at a time
   std::vector<double> m_constraint_dist;
-  /// spread over ranks: this rank's particles' positions and local indices
-  std::vector<Vec3> m_constraint_pos;
-  std::vector<std::size_t> m_constraint_index;
-  /// the bounding boxes of runs of constraint_chunk evaluated particles
-  /// (lower, upper corner; NaN-free or marked unbounded by lo = -inf)
-  std::vector<Vec3> m_constraint_chunk_lo, m_constraint_chunk_hi;
+  /// the constraints' runs of up to 32 of this rank's particles and the
+  /// box around each (infinite where a position is not finite)
+  struct ConstraintChunk {
+    std::size_t begin, end;
+    Vec3 lo, hi;
+  };
+  std::vector<ConstraintChunk> m_constraint_chunks;
   std::uint64_t m_bonds_version = 0;
   double m_time_step = 0.01;
   bool m_forces_valid = false;

@@ -163,57 +163,52 @@ void System::assign_owners() {
   auto& p = particles;
   const std::size_t n = p.n_local();
   const DomainGrid& grid = m_lb->domain();
-  const int me = m_spread.comm.rank();
   update_topology();
-  const std::vector<std::uint8_t> owned_before = m_spread.owned;
   m_spread.owner.assign(n, 0);
-  m_spread.owned.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     // a cell's nodes follow its reference, looked up once per cell (the
     // reference is its own reference, and comes first in its cell)
     const int ref = m_spread.reference[i];
     m_spread.owner[i] =
         static_cast<std::size_t>(ref) < i ? m_spread.owner[ref] : rank_of_position(p.pos[ref]);
-    m_spread.owned[i] = m_spread.owner[i] == me;
   }
-  // the membranes compile this rank's cells anew only when they changed
-  if (m_spread.owned != owned_before)
-    ++m_spread.version;
+  set_owned();
   m_spread.layout = p.layout_version;
   m_spread.mol = p.mol_version;
   m_spread.bonds = m_bonds_version;
   m_spread.cuts = grid.cuts();
 }
 
-const std::vector<std::pair<std::size_t, std::size_t>>& System::owned_runs() {
+const std::vector<std::pair<std::size_t, std::size_t>>& System::owned_runs() const {
+  if (owned_mask())
+    return m_spread.owned_runs;
   const std::size_t n = particles.n_local();
-  const std::uint8_t* own = owned_mask();
-  const bool same =
-      m_owned_runs_n == n &&
-      (own ? m_owned_runs_mask.size() == n && std::equal(own, own + n, m_owned_runs_mask.begin())
-           : m_owned_runs_mask.empty());
-  if (same)
-    return m_owned_runs;
-  m_owned_runs_n = n;
-  m_owned_runs.clear();
-  if (!own) {
-    m_owned_runs_mask.clear();
-    if (n > 0)
-      m_owned_runs.emplace_back(0, n);
-    return m_owned_runs;
-  }
-  m_owned_runs_mask.assign(own, own + n);
-  for (std::size_t i = 0; i < n;) {
-    if (!own[i]) {
-      ++i;
+  if (n == 0)
+    m_all_particles_run.clear();
+  else if (m_all_particles_run.size() != 1 || m_all_particles_run[0].second != n)
+    m_all_particles_run.assign(1, {0, n});
+  return m_all_particles_run;
+}
+
+void System::set_owned() {
+  const std::size_t n = particles.n_local();
+  const int me = m_spread.comm.rank();
+  std::vector<std::uint8_t>& owned = m_spread.owned;
+  const std::vector<std::uint8_t> before = owned;
+  owned.resize(n);
+  m_spread.owned_runs.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    owned[i] = m_spread.owner[i] == me;
+    if (!owned[i])
       continue;
-    }
-    const std::size_t first = i;
-    while (i < n && own[i])
-      ++i;
-    m_owned_runs.emplace_back(first, i);
+    if (!m_spread.owned_runs.empty() && m_spread.owned_runs.back().second == i)
+      ++m_spread.owned_runs.back().second;
+    else
+      m_spread.owned_runs.emplace_back(i, i + 1);
   }
-  return m_owned_runs;
+  // the membranes compile this rank's cells anew only when they changed
+  if (owned != before)
+    ++m_spread.version;
 }
 
 void System::build_exchange_lists() {
@@ -373,10 +368,7 @@ void System::resort_spread() {
       unpack(from[r].data() + per * k, static_cast<std::size_t>(arriving[r][k]));
   for (std::size_t k = 0; k < all_changes.size(); k += 2)
     m_spread.owner[all_changes[k]] = all_changes[k + 1];
-  for (std::size_t i = 0; i < n; ++i)
-    m_spread.owned[i] = m_spread.owner[i] == me;
-  if (!all_changes.empty())
-    ++m_spread.version;
+  set_owned();
   // (3) each owned particle to the ranks whose widened box holds it
   double extent = std::sqrt(extent2);
   MPI_Allreduce(MPI_IN_PLACE, &extent, 1, MPI_DOUBLE, MPI_MAX, comm);
