@@ -350,7 +350,8 @@ private:
     m_fluid_version_of_forces = m_lb ? m_lb->state_version() : 0;
     m_shape_version_of_forces = constraint_shape_version();
   }
-  /// per particle evaluated (spread over ranks: this rank's), one constraint at a time
+  /// a constraint's signed distances by local index (spread over ranks: only this
+  /// rank's entries are written and read), one constraint at a time
   std::vector<double> m_constraint_dist;
   /// the constraints' runs of up to 32 of this rank's particles and the
   /// box around each (infinite where a position is not finite)
