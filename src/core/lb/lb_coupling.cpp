@@ -412,7 +412,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   } catch (...) {
     if (ledger.ghosts_pending) // the neighbours wait for this rank's ghost velocities
       fluid.exchange_coupling_ghosts(false);
-    if (distributed) { // the other ranks wait for this one's part of the exchange
+    if (distributed && n > 0) { // the other ranks wait for this one's part of the exchange
       ledger.coupling_force.assign(n, Vec3::Zero());
       ledger.giver.assign(n, -1);
       distribution->share(ledger.coupling_force, ledger.giver, nullptr);
@@ -421,7 +421,9 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
     throw;
   }
   std::vector<Vec3>& coupling_force = ledger.coupling_force;
-  if (split) {
+  // (no particles: every rank stores every particle, so all ranks skip the
+  // exchange alike, as the ghost velocities' above)
+  if (split && n > 0) {
     const auto start = std::chrono::steady_clock::now();
     distribution->share(coupling_force, ledger.giver, listed);
     fluid.add_coupling_exchange_seconds(

@@ -646,6 +646,25 @@ std::vector<Real>& halo_buffer(std::vector<double>& as_double, std::vector<float
 template <typename Real> MPI_Datatype mpi_type() {
   return std::is_same_v<Real, float> ? MPI_FLOAT : MPI_DOUBLE;
 }
+/** Stores received halo values at their places: a face plane's
+ *  populations, across the split axis a lattice row apart, each on its own
+ *  cache line and a page every few places, which the hardware prefetchers
+ *  do not follow. The line `ahead` places on is requested while one is
+ *  stored (64: about the latency of the last-level cache at a nanosecond or
+ *  two per place). Measured at 2 ranks in the bifurcation scene (46 kB per
+ *  update): 0.0145 -> 0.0106 ms per update. The same requests in the
+ *  packing of the sends changed nothing (0.021 ms either way). */
+template <typename Real>
+void scatter_places(const Real* in, const std::vector<std::size_t>& places, Real* f) {
+  constexpr std::size_t ahead = 64;
+  const std::size_t n = places.size();
+  const std::size_t* at = places.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i + ahead < n)
+      __builtin_prefetch(f + at[i + ahead], 1, 3);
+    f[at[i]] = in[i];
+  }
+}
 } // namespace
 
 template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts) const {
@@ -674,13 +693,13 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
     MPI_Isend(send.data(), static_cast<int>(send.size()), mpi_type<Real>(), p.rank, 71,
               m_grid.comm(), &requests.back());
   }
+  // (the bounce-back, which touches other places, was tried here, between
+  // the sends and the wait, 27 Nov 2026: the wait did not shorten, as the
+  // transfer moves only inside MPI calls, and the stores after it slowed)
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
-  for (const HaloPeer& p : m_peers) {
-    const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
-    const std::vector<Real>& recv = halo_buffer<Real>(p.recv, p.recv_single);
-    for (std::size_t i = 0; i < in.size(); ++i)
-      f[in[i]] = recv[i];
-  }
+  for (const HaloPeer& p : m_peers)
+    scatter_places(halo_buffer<Real>(p.recv, p.recv_single).data(), fill_ghosts ? p.ghost : p.face,
+                   f);
 }
 
 void LBFluid::refresh_ghost_velocities() {

@@ -49,9 +49,15 @@ void System::prepare_step(int moved) {
         code = std::max(code, 1);
     }
   }
-  code = agree(code);
+  // No particles at all (a fluid alone, e.g. while the flow develops before
+  // the cells are seeded): every rank stores every particle, so every rank
+  // knows this alike and reaches the same code; there is nothing to agree
+  // on and no copy to refresh, and the step is the lattice update alone
+  const bool none = n == 0;
+  code = none ? code : agree(code);
   if (code == 0) {
-    exchange_current(false);
+    if (!none)
+      exchange_current(false);
     cells.update_ghosts(p, box);
     return;
   }

@@ -312,8 +312,9 @@ private:
   int agree(int code) const;
   /** Whether any membrane bond exists (the same on every rank). */
   bool has_membrane_bonds() const;
-  /** Raises on every rank the error of the lowest failing rank (collective;
-   *  local: this rank's error or null). Returns when no rank failed. */
+  /** Raises on every rank the error of the lowest failing rank (collective
+   *  where there are particles; without, every rank fails alike and raises
+   *  its own; local: this rank's error or null). Returns when no rank failed. */
   void raise_agreed(const std::exception_ptr& local) const;
   /** Re-sort if needed and update ghosts. moved: the integrator's drift
    *  already tested the displacements (1 beyond the skin, 0 not); -1: test. */

@@ -584,7 +584,9 @@ int System::agree(int code) const {
 }
 
 void System::raise_agreed(const std::exception_ptr& local) const {
-  if (!m_spread.active) {
+  // with no particles every phase's input is the same on every rank (the
+  // fluid is read only at particles): a phase fails on all ranks or on none
+  if (!m_spread.active || particles.n_local() == 0) {
     if (local)
       std::rethrow_exception(local);
     return;
