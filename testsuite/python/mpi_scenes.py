@@ -318,6 +318,9 @@ def main(argv=None):
             print(f"mpi_scenes: {e}", file=sys.stderr)
         sys.exit(3)
     result.update(state(sc))
+    # how the population halo travelled: neighbours through shared memory,
+    # summed over the ranks (0: MPI messages only); not a state, not compared
+    result["shared_halo_peers"] = np.array(comm.allreduce(sc["lbf"]._core.shared_halo_peers))
     for key, text in sc["text"].items():
         result["text_" + key] = np.array(text)
     if comm.Get_rank() == 0:

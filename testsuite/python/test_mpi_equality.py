@@ -44,6 +44,8 @@ KT_CELLS = 1e-4            # mpi_scenes.scene_cells_thermal
 RUN_TIMEOUT = 180          # s per mpirun; each takes under 5 s today (4 ranks on 2 cores)
 # sums over ranks (round-off depends on the decomposition), as documented
 SUM_RTOL = 1e-12
+# facts about the run, not its state: not compared with the 1-rank run
+NOT_STATE = ("ranks", "shared_halo_peers")
 
 
 def is_sum(key):
@@ -60,7 +62,7 @@ def compare_states(ref, res, label):
     missing, extra = sorted(set(ref) - set(res)), sorted(set(res) - set(ref))
     if missing or extra:
         raise AssertionError(f"{label}: quantities differ: missing {missing}, extra {extra}")
-    failures = [msg for msg in (compare_one(key, res[key], ref[key]) for key in sorted(ref) if key != "ranks")
+    failures = [msg for msg in (compare_one(key, res[key], ref[key]) for key in sorted(ref) if key not in NOT_STATE)
                 if msg]
     if failures:
         raise AssertionError(f"{label}: {len(failures)} quantities differ:\n  " + "\n  ".join(failures))
@@ -116,19 +118,21 @@ class MpiEquality(unittest.TestCase):
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
-    def run_scene(self, scene, ranks, node_grid=None):
+    def run_scene(self, scene, ranks, node_grid=None, messages=False):
         """The state of `scene` on `ranks` ranks (cached), or skip when the
-        engine has no node_grid for a requested grid."""
-        key = (scene, ranks, node_grid)
+        engine has no node_grid for a requested grid. messages: the lattice
+        halo through MPI messages only (PYOIF_HALO_SHARED=0), as between
+        ranks on different machines."""
+        key = (scene, ranks, node_grid, messages)
         if key in self.results:
             return self.results[key]
-        grid_tag = "" if node_grid is None else "_" + "x".join(map(str, node_grid))
+        grid_tag = ("" if node_grid is None else "_" + "x".join(map(str, node_grid))) + ("_messages" if messages else "")
         out = os.path.join(self.tmp.name, f"{scene}{grid_tag}_np{ranks}.npz")
         cmd = [MPIRUN, "--oversubscribe", "-np", str(ranks), LAUNCHER, SCENE_SCRIPT, scene, str(STEPS[scene]), out]
         if node_grid is not None:
             cmd += ["--node-grid", ",".join(map(str, node_grid))]
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1",
-                   PYOIF_SOURCE_DIR=SOURCE)
+                   PYOIF_SOURCE_DIR=SOURCE, PYOIF_HALO_SHARED="0" if messages else "1")
         start = time.perf_counter()
         proc = subprocess.Popen(cmd, cwd=self.tmp.name, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=env)
@@ -157,19 +161,27 @@ class MpiEquality(unittest.TestCase):
         result = load(out)
         os.remove(out)
         self.assertEqual(int(result["ranks"]), ranks)
+        # the ranks share this machine: the halo goes through shared memory
+        # between every pair of neighbours, unless told to use messages
+        if ranks == 1 or messages:
+            self.assertEqual(int(result["shared_halo_peers"]), 0, f"{scene} on {ranks} ranks{grid_tag}")
+        else:
+            self.assertGreater(int(result["shared_halo_peers"]), 0,
+                               f"{scene} on {ranks} ranks{grid_tag}: the lattice halo did not go through shared "
+                               f"memory (could the ranks not open each other's /proc/<pid>/fd?)")
         if ranks == 1:  # the reference, also for test_node_grids
             self.results[key] = result
         return result
 
-    def check_scene(self, scene, sane, ranks=RANKS, node_grid=None):
+    def check_scene(self, scene, sane, ranks=RANKS, node_grid=None, messages=False):
         ref = self.run_scene(scene, 1)
         self.check_finite(scene, ref)
         sane(ref)
         for k in ranks:
-            with self.subTest(ranks=k, node_grid=node_grid):
-                res = self.run_scene(scene, k, node_grid)
+            with self.subTest(ranks=k, node_grid=node_grid, messages=messages):
+                res = self.run_scene(scene, k, node_grid, messages)
                 compare_states(ref, res, f"scene {scene!r}, {k} ranks{'' if node_grid is None else f' {node_grid}'}"
-                                         " vs 1 rank")
+                                         f"{' (halo by messages)' if messages else ''} vs 1 rank")
 
     # --- the 1-rank state is physics, not garbage -------------------------------
     def check_finite(self, scene, r):
@@ -299,6 +311,13 @@ class MpiEquality(unittest.TestCase):
                                ("boundaries", 4, (2, 2, 1)), ("cells", 4, (2, 2, 1)), ("cells_thermal", 4, (1, 2, 2)),
                                ("crossing", 4, (2, 1, 2))):
             self.check_scene(scene, lambda r: None, ranks=(k,), node_grid=grid)
+
+    # --- the halo by MPI messages, as between machines (on one machine the
+    # neighbours read each other's halo from shared memory) -----------------
+    def test_halo_by_messages(self):
+        for scene, ranks, grid in (("boundaries", (2, 4), None), ("boundaries_single", (2,), None),
+                                   ("cells", (3,), None), ("fluid", (4,), (2, 2, 1))):
+            self.check_scene(scene, lambda r: None, ranks=ranks, node_grid=grid, messages=True)
 
     # --- the comparison itself can fail ------------------------------------------
     def test_comparison_detects_one_ulp(self):

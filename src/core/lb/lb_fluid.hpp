@@ -52,6 +52,7 @@
 #pragma once
 
 #include "communication/domain_grid.hpp"
+#include "communication/shared_segment.hpp"
 #include "lb/lb_lattice.hpp"
 #include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
@@ -245,6 +246,9 @@ public:
   }
   /** Bytes this rank sends to other ranks in one population halo exchange. */
   std::size_t halo_bytes() const;
+  /** Neighbouring ranks whose population halo goes through shared memory
+   *  (the others' through MPI messages). */
+  int shared_halo_peers() const;
   /** Seconds this rank spent in the population halo exchanges with other
    *  ranks, waiting included (not the periodic copies within the rank). */
   double halo_seconds() const { return m_halo_seconds; }
@@ -508,6 +512,15 @@ private:
   void repartition(const DomainGrid& old_grid);
   void rebuild_geometry();
   void build_halo_pairs();
+  /** Sets up the shared-memory halo with each neighbouring rank on this
+   *  machine (both must map the other's segment; else messages). Pairwise
+   *  with the neighbours, called by every rank in build_halo_pairs.
+   *  PYOIF_HALO_SHARED=0 in the environment keeps the messages. */
+  void connect_shared_halo();
+  /** Packs this update's sends to the shared-memory neighbours into this
+   *  rank's segment (before the update's agreement, which is also what
+   *  tells the neighbours the values are there). */
+  template <typename Real> void pack_shared_halo(const Real* f, bool fill_ghosts) const;
   /** Nodes of the ghost region o of the subdomain (lower, extent), in the
    *  order both neighbours list them: (global node, q) for every q moving
    *  into the region when with_q (the population halo: fluid pairs only),
@@ -683,8 +696,18 @@ private:
     mutable std::vector<double> send, recv;
     /// the population halo in single precision (MPI_FLOAT: half the bytes)
     mutable std::vector<float> send_single, recv_single;
+    /// On the same machine the population halo goes through shared memory
+    /// (connect_shared_halo): this rank packs what it sends into its
+    /// segment at own_offset, the neighbour reads it from there, and this
+    /// rank reads the neighbour's at peer_offset of `shared`; two buffers
+    /// of `capacity` values each, used in turn by update parity. Empty
+    /// `shared`: MPI messages.
+    PeerSegment shared;
+    std::size_t own_offset = 0, peer_offset = 0, capacity = 0;
   };
   std::vector<HaloPeer> m_peers;
+  /// this rank's halo buffers that neighbours on this machine read
+  SharedSegment m_halo_segment;
   std::vector<Vec3> m_ghost_velocity;
   /// padded index -> slot in m_ghost_velocity (no_ghost_slot: none), on a
   /// decomposed lattice: a dense table (4 bytes a node against the

@@ -22,10 +22,14 @@
 #include "utils/errors.hpp"
 #include "utils/random.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <type_traits>
@@ -623,6 +627,100 @@ void LBFluid::build_halo_pairs() {
                      [&](const Vec3i& g, int) { out.velocity_face.push_back(domain_index(g)); });
       }
   m_halo = merge_runs(std::move(pairs));
+  connect_shared_halo();
+}
+
+int LBFluid::shared_halo_peers() const {
+  flags_current();
+  int n = 0;
+  for (const HaloPeer& p : m_peers)
+    n += p.shared ? 1 : 0;
+  return n;
+}
+
+void LBFluid::connect_shared_halo() {
+  m_halo_segment = SharedSegment();
+  if (m_peers.empty())
+    return;
+  // this rank's segment: per neighbour two buffers (update parity) of as
+  // many values as the larger of its two lists (a fill sends the faces, a
+  // fold the ghosts), whole cache lines each, in double (a float fits)
+  std::size_t bytes = 0;
+  for (HaloPeer& p : m_peers) {
+    p.capacity = (std::max(p.face.size(), p.ghost.size()) + 7) / 8 * 8;
+    p.own_offset = SharedSegment::header + bytes;
+    bytes += 2 * p.capacity * sizeof(double);
+  }
+  const char* setting = std::getenv("PYOIF_HALO_SHARED");
+  const bool wanted = !(setting && std::string(setting) == "0");
+  if (wanted)
+    m_halo_segment = SharedSegment(bytes);
+  // the offer to each neighbour: pid, descriptor, size, cookie, the offset
+  // of its buffers (all zero: no segment); then whether each mapped the other's
+  const bool offered = m_halo_segment.data() != nullptr;
+  auto exchange = [&](auto make_send, int tag) {
+    std::vector<std::uint64_t> send(6 * m_peers.size()), recv(6 * m_peers.size());
+    std::vector<MPI_Request> requests(2 * m_peers.size());
+    for (std::size_t k = 0; k < m_peers.size(); ++k) {
+      make_send(m_peers[k], send.data() + 6 * k);
+      MPI_Irecv(recv.data() + 6 * k, 6, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
+                &requests[2 * k]);
+      MPI_Isend(send.data() + 6 * k, 6, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
+                &requests[2 * k + 1]);
+    }
+    MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    return recv;
+  };
+  const std::vector<std::uint64_t> offers = exchange(
+      [&](const HaloPeer& p, std::uint64_t* out) {
+        out[0] = offered ? static_cast<std::uint64_t>(getpid()) : 0;
+        out[1] = offered ? static_cast<std::uint64_t>(m_halo_segment.fd()) : 0;
+        out[2] = offered ? m_halo_segment.size() - SharedSegment::header : 0;
+        out[3] = offered ? m_halo_segment.cookie() : 0;
+        out[4] = p.own_offset;
+        out[5] = p.capacity;
+      },
+      74);
+  for (std::size_t k = 0; k < m_peers.size(); ++k) {
+    HaloPeer& p = m_peers[k];
+    const std::uint64_t* o = offers.data() + 6 * k;
+    // (the neighbour's lists for this rank are as long as this rank's for it)
+    if (offered && o[0] != 0 && o[5] == p.capacity)
+      p.shared = PeerSegment(static_cast<long>(o[0]), static_cast<int>(o[1]),
+                             static_cast<std::size_t>(o[2]), o[3]);
+    p.peer_offset = static_cast<std::size_t>(o[4]);
+  }
+  const std::vector<std::uint64_t> mapped = exchange(
+      [&](const HaloPeer& p, std::uint64_t* out) {
+        std::fill(out, out + 6, std::uint64_t{0});
+        out[0] = p.shared ? 1 : 0;
+      },
+      75);
+  bool any = false;
+  for (std::size_t k = 0; k < m_peers.size(); ++k) {
+    HaloPeer& p = m_peers[k];
+    if (!(p.shared && mapped[6 * k] == 1))
+      p.shared = PeerSegment(); // one way only: both use messages
+    any |= static_cast<bool>(p.shared);
+  }
+  m_halo_segment.close_fd(); // every neighbour has tried to open it
+  if (!any)
+    m_halo_segment = SharedSegment();
+}
+
+template <typename Real> void LBFluid::pack_shared_halo(const Real* f, bool fill_ghosts) const {
+  const std::size_t parity = m_updates & 1u;
+  for (const HaloPeer& p : m_peers) {
+    if (!p.shared)
+      continue;
+    const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
+    Real* to = reinterpret_cast<Real*>(m_halo_segment.data() + p.own_offset +
+                                       parity * p.capacity * sizeof(double));
+    for (std::size_t i = 0; i < out.size(); ++i)
+      to[i] = f[out[i]];
+  }
+  // the values before the agreement that tells the neighbours they are there
+  std::atomic_thread_fence(std::memory_order_release);
 }
 
 std::size_t LBFluid::halo_bytes() const {
@@ -676,6 +774,8 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
   std::vector<MPI_Request> requests;
   requests.reserve(2 * m_peers.size());
   for (const HaloPeer& p : m_peers) {
+    if (p.shared)
+      continue;
     const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
     std::vector<Real>& recv = halo_buffer<Real>(p.recv, p.recv_single);
     recv.resize(in.size());
@@ -684,6 +784,8 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
               m_grid.comm(), &requests.back());
   }
   for (const HaloPeer& p : m_peers) {
+    if (p.shared)
+      continue;
     const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
     std::vector<Real>& send = halo_buffer<Real>(p.send, p.send_single);
     send.resize(out.size());
@@ -696,10 +798,23 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
   // (the bounce-back, which touches other places, was tried here, between
   // the sends and the wait, 27 Nov 2026: the wait did not shorten, as the
   // transfer moves only inside MPI calls, and the stores after it slowed)
+  // the neighbours on this machine packed theirs before the agreement
+  // (pack_shared_halo), which every rank has passed: read in place, while
+  // the messages travel. A neighbour packs into this buffer again two
+  // updates on, after the next agreement, which this rank joins only when
+  // done here: no other wait is needed.
+  std::atomic_thread_fence(std::memory_order_acquire);
+  const std::size_t parity = m_updates & 1u;
+  for (const HaloPeer& p : m_peers)
+    if (p.shared)
+      scatter_places(reinterpret_cast<const Real*>(p.shared.data() + p.peer_offset +
+                                                   parity * p.capacity * sizeof(double)),
+                     fill_ghosts ? p.ghost : p.face, f);
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (const HaloPeer& p : m_peers)
-    scatter_places(halo_buffer<Real>(p.recv, p.recv_single).data(), fill_ghosts ? p.ghost : p.face,
-                   f);
+    if (!p.shared)
+      scatter_places(halo_buffer<Real>(p.recv, p.recv_single).data(),
+                     fill_ghosts ? p.ghost : p.face, f);
 }
 
 void LBFluid::refresh_ghost_velocities() {
@@ -921,7 +1036,15 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
     // every rank learns of a bad node anywhere (the lowest rank's is
     // reported by all), before anyone waits for a halo that will not come
     int failing = first_bad < n_runs ? m_grid.rank() : m_grid.size();
-    MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
+    if (!m_halo_segment.data()) {
+      MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
+    } else {
+      const auto start = std::chrono::steady_clock::now();
+      pack_shared_halo(f, even);
+      m_halo_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
+    }
     if (failing < m_grid.size()) {
       std::string message;
       if (failing == m_grid.rank()) {

@@ -127,6 +127,11 @@ void bind_lb(py::module_& m) {
                                return f.halo_bytes();
                              })
       .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
+      .def_property_readonly("shared_halo_peers",
+                             [](LBFluid& f) {
+                               flag_pending(f);
+                               return f.shared_halo_peers();
+                             })
       .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
       .def_property_readonly("shape", [](const LBFluid& f) { return f.grid(); })
       .def_property_readonly("agrid", &LBFluid::agrid)

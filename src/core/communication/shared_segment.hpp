@@ -1,0 +1,78 @@
+// Memory that ranks on the same machine read from each other directly: the
+// lattice's halo goes through it instead of MPI messages (LBFluid,
+// lb_kernel.cpp), which saves the transfer's copies and its handshake.
+//
+// A segment is an anonymous memory file (memfd_create) mapped by its owner;
+// another process maps it read-only through /proc/<pid>/fd/<fd>, which the
+// owner keeps open until the others have tried. Nothing about it is
+// collective: a process unmaps what it mapped whenever it likes, and the
+// memory lives until the last mapping is gone (so an LBFluid may be
+// destroyed on one rank before another, as Python's garbage collection
+// does). Whether two ranks share one machine is not assumed from MPI: the
+// owner writes a random cookie at the start, told to the others by MPI,
+// and a mapping whose cookie differs (another machine, another process of
+// that pid) is dropped, and the messages are used.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+
+namespace pyoif {
+
+/** This process's segment: `bytes` of zeroed memory after a header that
+ *  holds the cookie. Empty (data() null) when it could not be made. */
+class SharedSegment {
+public:
+  static constexpr std::size_t header = 64;
+  SharedSegment() = default;
+  explicit SharedSegment(std::size_t bytes);
+  ~SharedSegment();
+  SharedSegment(SharedSegment&& other) noexcept { swap(other); }
+  SharedSegment& operator=(SharedSegment&& other) noexcept {
+    SharedSegment(std::move(other)).swap(*this);
+    return *this;
+  }
+  SharedSegment(const SharedSegment&) = delete;
+  SharedSegment& operator=(const SharedSegment&) = delete;
+
+  unsigned char* data() const { return m_data; }
+  std::size_t size() const { return m_size; }
+  int fd() const { return m_fd; }
+  std::uint64_t cookie() const { return m_cookie; }
+  /** Closes the descriptor others open it through (the mapping stays). */
+  void close_fd();
+
+private:
+  void swap(SharedSegment& other) noexcept;
+  unsigned char* m_data = nullptr;
+  std::size_t m_size = 0;
+  int m_fd = -1;
+  std::uint64_t m_cookie = 0;
+};
+
+/** Another process's segment, mapped read-only; empty when it could not be
+ *  mapped or its cookie differs. */
+class PeerSegment {
+public:
+  PeerSegment() = default;
+  PeerSegment(long pid, int fd, std::size_t bytes, std::uint64_t cookie);
+  ~PeerSegment();
+  PeerSegment(PeerSegment&& other) noexcept { swap(other); }
+  PeerSegment& operator=(PeerSegment&& other) noexcept {
+    PeerSegment(std::move(other)).swap(*this);
+    return *this;
+  }
+  PeerSegment(const PeerSegment&) = delete;
+  PeerSegment& operator=(const PeerSegment&) = delete;
+
+  const unsigned char* data() const { return m_data; }
+  explicit operator bool() const { return m_data != nullptr; }
+
+private:
+  void swap(PeerSegment& other) noexcept;
+  const unsigned char* m_data = nullptr;
+  std::size_t m_size = 0;
+};
+
+} // namespace pyoif
