@@ -130,6 +130,28 @@ class DistancesThroughPython(unittest.TestCase):
         inner.add(shapes.Sphere(center=[10, 0, 0], radius=1))
         self.expect(outer2, [12.5, 0, 0], 1.5, [1, 0, 0])
 
+    def test_signed_distances_in_one_call_equal_calc_dist(self):
+        """The bulk call the seeding uses (fluid volume, clearance) gives
+        each point's calc_dist exactly; beyond `range` any value >= range."""
+        rng = np.random.default_rng(4)
+        points = rng.uniform(-3.0, 8.0, size=(400, 3))
+        for shape in (shapes.Sphere(center=[1, 2, 3], radius=2),
+                      shapes.Cylinder(center=[0, 0, 0], axis=[0, 0, 3], radius=1, length=4),
+                      shapes.Rhomboid(corner=[1, 1, 1], a=[2, 0, 0], b=[0, 3, 0], c=[0, 0, 4]),
+                      shapes.Wall(normal=[0, 0, 1], dist=0.5),
+                      shapes.SimplePore(center=[0, 0, 0], axis=[0, 0, 1], length=4, radius=1,
+                                        smoothing_radius=0.5),
+                      shapes.Union(shapes=[shapes.Sphere(center=[0, 0, 5], radius=1),
+                                           shapes.Wall(normal=[0, 0, 1], dist=0)])):
+            with self.subTest(shape=type(shape).__name__):
+                one_by_one = np.array([shape.calc_dist(p)[0] for p in points])
+                together = shape._core.signed_distances(points)
+                np.testing.assert_array_equal(together, one_by_one)
+                near = shape._core.signed_distances(points, 1.0)
+                close = one_by_one < 1.0
+                np.testing.assert_array_equal(near[close], one_by_one[close])
+                self.assertTrue(np.all(near[~close] >= 1.0))
+
     def test_ported_through_lbmd_namespace(self):
         import lbmd.shapes as s2
         self.assertIs(lbmd.shapes.Sphere, s2.Sphere)

@@ -8,6 +8,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <limits>
+#include <vector>
+
 namespace py = pybind11;
 
 namespace pyoif::python {
@@ -150,6 +153,25 @@ void bind_interactions(py::module_& m) {
              sh.calc_dist(pos, dist, normal);
              return py::make_tuple(dist, normal);
            })
+      // the signed distances of an (n, 3) array of points in one call (the
+      // seeding's fluid volume and clearance tests): exact where below
+      // `range`, else any value >= range (Shape::signed_distances)
+      .def(
+          "signed_distances",
+          [](const shapes::Shape& sh,
+             const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>& pos,
+             double range) {
+            std::vector<Vec3> points(static_cast<std::size_t>(pos.rows()));
+            for (Eigen::Index i = 0; i < pos.rows(); ++i)
+              points[static_cast<std::size_t>(i)] = pos.row(i).transpose();
+            Eigen::VectorXd dist(pos.rows());
+            {
+              py::gil_scoped_release release;
+              sh.signed_distances(points.data(), points.size(), range, dist.data());
+            }
+            return dist;
+          },
+          py::arg("pos"), py::arg("range") = std::numeric_limits<double>::infinity())
       .def("is_inside", &shapes::Shape::is_inside)
       .def_property_readonly("name", &shapes::Shape::name);
 
