@@ -704,7 +704,13 @@ private:
     /// `shared`: MPI messages.
     PeerSegment shared;
     std::size_t own_offset = 0, peer_offset = 0, capacity = 0;
+    /// the same for the coupling's ghost velocities (a count, then 4
+    /// values per node), signalled by an empty message per round
+    std::size_t own_velocity_offset = 0, peer_velocity_offset = 0, velocity_capacity = 0,
+                peer_velocity_capacity = 0;
   };
+  /// rounds of exchange_coupling_ghosts so far (their buffers' parity)
+  std::uint64_t m_coupling_rounds = 0;
   std::vector<HaloPeer> m_peers;
   /// this rank's halo buffers that neighbours on this machine read
   SharedSegment m_halo_segment;

@@ -650,22 +650,27 @@ void LBFluid::connect_shared_halo() {
     p.capacity = (std::max(p.face.size(), p.ghost.size()) + 7) / 8 * 8;
     p.own_offset = SharedSegment::header + bytes;
     bytes += 2 * p.capacity * sizeof(double);
+    p.velocity_capacity = (1 + 4 * p.velocity_face.size() + 7) / 8 * 8;
+    p.own_velocity_offset = SharedSegment::header + bytes;
+    bytes += 2 * p.velocity_capacity * sizeof(double);
   }
+  m_coupling_rounds = 0;
   const char* setting = std::getenv("PYOIF_HALO_SHARED");
   const bool wanted = !(setting && std::string(setting) == "0");
   if (wanted)
     m_halo_segment = SharedSegment(bytes);
-  // the offer to each neighbour: pid, descriptor, size, cookie, the offset
+  // the offer to each neighbour: pid, descriptor, size, cookie, the offsets
   // of its buffers (all zero: no segment); then whether each mapped the other's
   const bool offered = m_halo_segment.data() != nullptr;
+  constexpr int fields = 8;
   auto exchange = [&](auto make_send, int tag) {
-    std::vector<std::uint64_t> send(6 * m_peers.size()), recv(6 * m_peers.size());
+    std::vector<std::uint64_t> send(fields * m_peers.size()), recv(fields * m_peers.size());
     std::vector<MPI_Request> requests(2 * m_peers.size());
     for (std::size_t k = 0; k < m_peers.size(); ++k) {
-      make_send(m_peers[k], send.data() + 6 * k);
-      MPI_Irecv(recv.data() + 6 * k, 6, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
+      make_send(m_peers[k], send.data() + fields * k);
+      MPI_Irecv(recv.data() + fields * k, fields, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
                 &requests[2 * k]);
-      MPI_Isend(send.data() + 6 * k, 6, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
+      MPI_Isend(send.data() + fields * k, fields, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
                 &requests[2 * k + 1]);
     }
     MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
@@ -679,27 +684,31 @@ void LBFluid::connect_shared_halo() {
         out[3] = offered ? m_halo_segment.cookie() : 0;
         out[4] = p.own_offset;
         out[5] = p.capacity;
+        out[6] = p.own_velocity_offset;
+        out[7] = p.velocity_capacity;
       },
       74);
   for (std::size_t k = 0; k < m_peers.size(); ++k) {
     HaloPeer& p = m_peers[k];
-    const std::uint64_t* o = offers.data() + 6 * k;
+    const std::uint64_t* o = offers.data() + fields * k;
     // (the neighbour's lists for this rank are as long as this rank's for it)
     if (offered && o[0] != 0 && o[5] == p.capacity)
       p.shared = PeerSegment(static_cast<long>(o[0]), static_cast<int>(o[1]),
                              static_cast<std::size_t>(o[2]), o[3]);
     p.peer_offset = static_cast<std::size_t>(o[4]);
+    p.peer_velocity_offset = static_cast<std::size_t>(o[6]);
+    p.peer_velocity_capacity = static_cast<std::size_t>(o[7]);
   }
   const std::vector<std::uint64_t> mapped = exchange(
       [&](const HaloPeer& p, std::uint64_t* out) {
-        std::fill(out, out + 6, std::uint64_t{0});
+        std::fill(out, out + fields, std::uint64_t{0});
         out[0] = p.shared ? 1 : 0;
       },
       75);
   bool any = false;
   for (std::size_t k = 0; k < m_peers.size(); ++k) {
     HaloPeer& p = m_peers[k];
-    if (!(p.shared && mapped[6 * k] == 1))
+    if (!(p.shared && mapped[fields * k] == 1))
       p.shared = PeerSegment(); // one way only: both use messages
     any |= static_cast<bool>(p.shared);
   }
@@ -861,42 +870,75 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
   auto* state = m_ledger.node_coupling.data();
   auto listed = [needed](std::size_t n) { return ((needed[n >> 6] >> (n & 63)) & 1) != 0; };
   // per node sent: its place in the peer's velocity list, then the velocity
-  // (4 doubles; the place is exact in a double)
+  // (4 doubles; the place is exact in a double). A neighbour on this machine
+  // reads them from this rank's segment (a count first), told by an empty
+  // message that they are there; this rank writes that buffer again two
+  // rounds on, after the neighbour's empty message of the next round, which
+  // it sends only after reading.
   constexpr std::size_t per = 4;
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * m_peers.size());
-  for (const HaloPeer& peer : m_peers) {
-    peer.recv.resize(per * peer.velocity_slot.size());
-    requests.emplace_back();
-    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 73,
-              m_grid.comm(), &requests.back());
-  }
-  for (const HaloPeer& peer : m_peers) {
-    peer.send.clear();
+  const std::size_t parity = m_coupling_rounds++ & 1u;
+  auto own_buffer = [&](const HaloPeer& peer) {
+    return reinterpret_cast<double*>(m_halo_segment.data() + peer.own_velocity_offset +
+                                     parity * peer.velocity_capacity * sizeof(double));
+  };
+  auto pack = [&](const HaloPeer& peer, double* out) {
+    std::size_t k = 0;
     if (with_values)
       for (std::size_t i = 0; i < peer.velocity_face.size(); ++i) {
         const std::size_t n = peer.velocity_face[i];
         if (!listed(n))
           continue;
         const Vec3& u = state[entry[n]].velocity;
-        peer.send.insert(peer.send.end(), {static_cast<double>(i), u[0], u[1], u[2]});
+        out[k] = static_cast<double>(i);
+        out[k + 1] = u[0];
+        out[k + 2] = u[1];
+        out[k + 3] = u[2];
+        k += per;
       }
+    return k;
+  };
+  std::vector<MPI_Request> requests;
+  requests.reserve(2 * m_peers.size());
+  for (const HaloPeer& peer : m_peers) {
+    peer.recv.resize(peer.shared ? 0 : per * peer.velocity_slot.size());
+    requests.emplace_back();
+    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 73,
+              m_grid.comm(), &requests.back());
+  }
+  for (const HaloPeer& peer : m_peers) {
+    if (peer.shared) {
+      double* out = own_buffer(peer);
+      out[0] = static_cast<double>(pack(peer, out + 1));
+      std::atomic_thread_fence(std::memory_order_release);
+      peer.send.clear(); // the empty message
+    } else {
+      peer.send.resize(per * peer.velocity_face.size());
+      peer.send.resize(pack(peer, peer.send.data()));
+    }
     requests.emplace_back();
     MPI_Isend(peer.send.data(), static_cast<int>(peer.send.size()), MPI_DOUBLE, peer.rank, 73,
               m_grid.comm(), &requests.back());
   }
   std::vector<MPI_Status> statuses(requests.size());
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  std::atomic_thread_fence(std::memory_order_acquire);
   if (with_values)
     for (std::size_t k = 0; k < m_peers.size(); ++k) {
       const HaloPeer& peer = m_peers[k];
+      const double* in = peer.recv.data();
       int received = 0;
-      MPI_Get_count(&statuses[k], MPI_DOUBLE, &received);
+      if (peer.shared) {
+        in = reinterpret_cast<const double*>(peer.shared.data() + peer.peer_velocity_offset +
+                                             parity * peer.peer_velocity_capacity * sizeof(double));
+        received = static_cast<int>(in[0]);
+        ++in;
+      } else {
+        MPI_Get_count(&statuses[k], MPI_DOUBLE, &received);
+      }
       for (std::size_t j = 0; j + per <= static_cast<std::size_t>(received); j += per) {
-        const std::size_t n =
-            m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(peer.recv[j])]];
+        const std::size_t n = m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(in[j])]];
         if (is_fluid_ghost(n) && listed(n))
-          state[entry[n]].velocity = Vec3(peer.recv[j + 1], peer.recv[j + 2], peer.recv[j + 3]);
+          state[entry[n]].velocity = Vec3(in[j + 1], in[j + 2], in[j + 3]);
       }
     }
   m_coupling_exchange_seconds +=
