@@ -696,18 +696,22 @@ private:
     mutable std::vector<double> send, recv;
     /// the population halo in single precision (MPI_FLOAT: half the bytes)
     mutable std::vector<float> send_single, recv_single;
+    /// Two buffers of `capacity` doubles at `offset` bytes into a segment,
+    /// used in turn by round parity.
+    struct Buffers {
+      std::size_t offset = 0, capacity = 0;
+      template <typename T, typename Byte> T* at(Byte* segment, std::size_t parity) const {
+        return reinterpret_cast<T*>(segment + offset + parity * capacity * sizeof(double));
+      }
+    };
     /// On the same machine the population halo goes through shared memory
     /// (connect_shared_halo): this rank packs what it sends into its
-    /// segment at own_offset, the neighbour reads it from there, and this
-    /// rank reads the neighbour's at peer_offset of `shared`; two buffers
-    /// of `capacity` values each, used in turn by update parity. Empty
-    /// `shared`: MPI messages.
+    /// segment (own_halo), the neighbour reads it from there, and this rank
+    /// reads the neighbour's (peer_halo of `shared`); the coupling's ghost
+    /// velocities likewise (a count, then 4 values per node, signalled by
+    /// an empty message per round). Empty `shared`: MPI messages.
     PeerSegment shared;
-    std::size_t own_offset = 0, peer_offset = 0, capacity = 0;
-    /// the same for the coupling's ghost velocities (a count, then 4
-    /// values per node), signalled by an empty message per round
-    std::size_t own_velocity_offset = 0, peer_velocity_offset = 0, velocity_capacity = 0,
-                peer_velocity_capacity = 0;
+    Buffers own_halo, peer_halo, own_velocity, peer_velocity;
   };
   /// rounds of exchange_coupling_ghosts so far (their buffers' parity)
   std::uint64_t m_coupling_rounds = 0;

@@ -646,13 +646,14 @@ void LBFluid::connect_shared_halo() {
   // many values as the larger of its two lists (a fill sends the faces, a
   // fold the ghosts), whole cache lines each, in double (a float fits)
   std::size_t bytes = 0;
+  auto reserve = [&](HaloPeer::Buffers& b, std::size_t values) {
+    b.capacity = (values + 7) / 8 * 8;
+    b.offset = SharedSegment::header + bytes;
+    bytes += 2 * b.capacity * sizeof(double);
+  };
   for (HaloPeer& p : m_peers) {
-    p.capacity = (std::max(p.face.size(), p.ghost.size()) + 7) / 8 * 8;
-    p.own_offset = SharedSegment::header + bytes;
-    bytes += 2 * p.capacity * sizeof(double);
-    p.velocity_capacity = (1 + 4 * p.velocity_face.size() + 7) / 8 * 8;
-    p.own_velocity_offset = SharedSegment::header + bytes;
-    bytes += 2 * p.velocity_capacity * sizeof(double);
+    reserve(p.own_halo, std::max(p.face.size(), p.ghost.size()));
+    reserve(p.own_velocity, 1 + 4 * p.velocity_face.size());
   }
   m_coupling_rounds = 0;
   const char* setting = std::getenv("PYOIF_HALO_SHARED");
@@ -682,22 +683,21 @@ void LBFluid::connect_shared_halo() {
         out[1] = offered ? static_cast<std::uint64_t>(m_halo_segment.fd()) : 0;
         out[2] = offered ? m_halo_segment.size() - SharedSegment::header : 0;
         out[3] = offered ? m_halo_segment.cookie() : 0;
-        out[4] = p.own_offset;
-        out[5] = p.capacity;
-        out[6] = p.own_velocity_offset;
-        out[7] = p.velocity_capacity;
+        out[4] = p.own_halo.offset;
+        out[5] = p.own_halo.capacity;
+        out[6] = p.own_velocity.offset;
+        out[7] = p.own_velocity.capacity;
       },
       74);
   for (std::size_t k = 0; k < m_peers.size(); ++k) {
     HaloPeer& p = m_peers[k];
     const std::uint64_t* o = offers.data() + fields * k;
     // (the neighbour's lists for this rank are as long as this rank's for it)
-    if (offered && o[0] != 0 && o[5] == p.capacity)
+    if (offered && o[0] != 0 && o[5] == p.own_halo.capacity)
       p.shared = PeerSegment(static_cast<long>(o[0]), static_cast<int>(o[1]),
                              static_cast<std::size_t>(o[2]), o[3]);
-    p.peer_offset = static_cast<std::size_t>(o[4]);
-    p.peer_velocity_offset = static_cast<std::size_t>(o[6]);
-    p.peer_velocity_capacity = static_cast<std::size_t>(o[7]);
+    p.peer_halo = {static_cast<std::size_t>(o[4]), static_cast<std::size_t>(o[5])};
+    p.peer_velocity = {static_cast<std::size_t>(o[6]), static_cast<std::size_t>(o[7])};
   }
   const std::vector<std::uint64_t> mapped = exchange(
       [&](const HaloPeer& p, std::uint64_t* out) {
@@ -723,8 +723,7 @@ template <typename Real> void LBFluid::pack_shared_halo(const Real* f, bool fill
     if (!p.shared)
       continue;
     const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
-    Real* to = reinterpret_cast<Real*>(m_halo_segment.data() + p.own_offset +
-                                       parity * p.capacity * sizeof(double));
+    Real* to = p.own_halo.at<Real>(m_halo_segment.data(), parity);
     for (std::size_t i = 0; i < out.size(); ++i)
       to[i] = f[out[i]];
   }
@@ -816,8 +815,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
   const std::size_t parity = m_updates & 1u;
   for (const HaloPeer& p : m_peers)
     if (p.shared)
-      scatter_places(reinterpret_cast<const Real*>(p.shared.data() + p.peer_offset +
-                                                   parity * p.capacity * sizeof(double)),
+      scatter_places(p.peer_halo.at<const Real>(p.shared.data(), parity),
                      fill_ghosts ? p.ghost : p.face, f);
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (const HaloPeer& p : m_peers)
@@ -877,10 +875,6 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
   // it sends only after reading.
   constexpr std::size_t per = 4;
   const std::size_t parity = m_coupling_rounds++ & 1u;
-  auto own_buffer = [&](const HaloPeer& peer) {
-    return reinterpret_cast<double*>(m_halo_segment.data() + peer.own_velocity_offset +
-                                     parity * peer.velocity_capacity * sizeof(double));
-  };
   auto pack = [&](const HaloPeer& peer, double* out) {
     std::size_t k = 0;
     if (with_values)
@@ -907,7 +901,7 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
   }
   for (const HaloPeer& peer : m_peers) {
     if (peer.shared) {
-      double* out = own_buffer(peer);
+      double* out = peer.own_velocity.at<double>(m_halo_segment.data(), parity);
       out[0] = static_cast<double>(pack(peer, out + 1));
       std::atomic_thread_fence(std::memory_order_release);
       peer.send.clear(); // the empty message
@@ -928,8 +922,7 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
       const double* in = peer.recv.data();
       int received = 0;
       if (peer.shared) {
-        in = reinterpret_cast<const double*>(peer.shared.data() + peer.peer_velocity_offset +
-                                             parity * peer.peer_velocity_capacity * sizeof(double));
+        in = peer.peer_velocity.at<const double>(peer.shared.data(), parity);
         received = static_cast<int>(in[0]);
         ++in;
       } else {
@@ -1078,15 +1071,13 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
     // every rank learns of a bad node anywhere (the lowest rank's is
     // reported by all), before anyone waits for a halo that will not come
     int failing = first_bad < n_runs ? m_grid.rank() : m_grid.size();
-    if (!m_halo_segment.data()) {
-      MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
-    } else {
+    if (m_halo_segment.data()) { // (the agreement also tells the neighbours it is packed)
       const auto start = std::chrono::steady_clock::now();
       pack_shared_halo(f, even);
       m_halo_seconds +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
     }
+    MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_grid.comm());
     if (failing < m_grid.size()) {
       std::string message;
       if (failing == m_grid.rank()) {

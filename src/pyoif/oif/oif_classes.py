@@ -148,6 +148,7 @@ def _warn_overlaps(owner, system, pos, triangles, cell_id):
     then a winding number only for the nodes in the other cell's box;
     periodic images are not looked at."""
     import warnings
+    from .seeding import _signed_distances  # (seeding imports this module)
     lo, hi = pos.min(axis=0), pos.max(axis=0)
     hits = []
     for c in live_cells(system):
@@ -164,7 +165,6 @@ def _warn_overlaps(owner, system, pos, triangles, cell_id):
         shape = getattr(con, "shape", None)
         if shape is None or getattr(con, "penetrable", False):
             continue
-        from .seeding import _signed_distances  # (seeding imports this module)
         n_in = int(np.count_nonzero(_signed_distances(shape)(pos) <= 0.0))  # is_inside, all at once
         if n_in:
             hits.append(f"constraint {k} ({type(shape).__name__}, {n_in} of its nodes inside)")
