@@ -9,8 +9,9 @@ dependence on shear rate and suspending medium", Biophys. J. 108,
         [--coupling 2] [--box 24 16 20] [--strain 60] [--sim-rate 0.004] [--max-scale 40] [--output DIR]
 
 The cell: the Evans-Fung RBC of radius 3.91 um with the project's moduli
-ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9 (1 um, 1 us, 1e-15 kg; the same
-as in rbc_stretching.py, not fitted here), disc initially flat in the
+ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9 (1 um, 1 us, 1e-15 kg; the
+published set, oif.stretching.RBC_MODULI, as rbc_stretching.py --moduli
+paper; not fitted here), disc initially flat in the
 flow-vorticity plane, midway between two LB walls moving at -U and +U
 (Couette flow, shear_flow.py; box 24 x 16 um, channel height 20 um, i.e.
 a/H = 0.2), fluid of dynamic viscosity 1.5 mPa s (plasma), the same inside

@@ -18,13 +18,15 @@ the range of the experimental scatter (data/mills2004_stretching.csv).
 The moduli (paper's units: 1 um, 1 us, 1e-15 kg, force 1 = 1 nN):
 
 - ``--moduli mills`` (default): ks 0.005, kb 0.01, kal 0.007, kag 0.7,
-  kv 0.9 (oif.stretching.MILLS_MODULI), the published set calibrated on
-  this experiment as the model's authors calibrate theirs: the bending
-  modulus halved. Inside the experimental range at every force on rbc374
-  and finer meshes.
+  kv 0.9 (oif.stretching.MILLS_MODULI), our calibration of the published
+  set on this experiment, as the model's authors calibrate theirs: the
+  bending modulus halved (not a published value). Inside the experimental
+  range at every force on rbc374 and finer meshes.
 - ``--moduli paper``: ks 0.005, kb 0.02, kal 0.007, kag 0.7, kv 0.9
   (oif.stretching.RBC_MODULI), the published set the flow samples use:
-  within 0.1 um of the range, up to 0.09 um above it at 16 pN.
+  within 0.1 um of the range (the transverse diameter up to 0.09 um above
+  it at 16 pN; on rbc1002 and finer the axial one 0.06-0.08 um under it
+  at 151 pN).
 
 Writes <output>/rbc_stretching_<mesh>.csv (force, our diameters, the
 data's mean and range, inside or not) and rbc_stretching_<mesh>.png
@@ -110,7 +112,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mesh", default="rbc374", help="shipped RBC mesh: rbc374, rbc642, rbc1002, rbc2562, ...")
     parser.add_argument("--moduli", choices=sorted(MODULI), default="mills",
-                        help="mills: the published set calibrated on this experiment (kb 0.01, default); "
+                        help="mills: our calibration of the published set on this experiment (kb 0.01, "
+                             "default); "
                              "paper: the published set (kb 0.02)")
     parser.add_argument("--forces", type=float, nargs="+", default=list(oif.stretching.MILLS_FORCES_PN),
                         help="forces on each bead in pN (default: those of Mills et al.)")

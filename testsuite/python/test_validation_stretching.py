@@ -8,9 +8,9 @@ experimental scatter at each force).
 
 Two sets of moduli (paper's units; oif.stretching):
 
-- MILLS_MODULI, the published set calibrated on this experiment (kb 0.01
-  instead of 0.02, every other modulus as published), the sample's
-  default. Tolerance: each diameter inside the experimental range itself
+- MILLS_MODULI, our calibration of the published set on this experiment
+  (kb 0.01 instead of 0.02, not a published value; every other modulus as
+  published), the sample's default. Tolerance: each diameter inside the experimental range itself
   at every force, on rbc374, rbc642 and rbc1002. Measured (27 Nov 2026):
   inside on these and rbc2562; the nearest approach is the transverse
   diameter at 16 pN, 0.05-0.10 um under the range's top (6.71-6.76
@@ -19,7 +19,7 @@ Two sets of moduli (paper's units; oif.stretching):
   kv 0.9), on rbc374 only. Tolerance: inside the range widened by 0.1 um
   (1.3 % of the unloaded diameter, about the precision of reading the
   figure). Measured: the transverse diameter 0.054 um above the range at
-  16 pN, everything else inside.
+  16 pN, 0.03 at 38 pN and 0.01 at 67 pN, the other 10 forces inside.
 
 At 0 pN both diameters equal the relaxed cell's within 1e-3 um.
 rbc374 takes about 5 CPU s, rbc642 about 9, rbc1002 about 13."""

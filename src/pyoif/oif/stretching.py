@@ -28,12 +28,14 @@ whatever its edge length, Dao, Li & Suresh, J. Mech. Phys. Solids 54,
 J. Phys. I France 6, 1305, 1996), so one set serves every mesh. With them
 the diameters lie within 0.1 um of the experiment's scatter at every force
 on rbc374 to rbc2562, at its stiff side, but not inside it: the waist
-narrows too slowly at low forces (0.05-0.09 um above the range at 16 pN).
+narrows too slowly at low forces (0.05-0.09 um above the range at 16 pN),
+and on rbc1002 and rbc2562 the axial diameter is 0.06-0.08 um under the
+range at 151 pN.
 
-``MILLS_MODULI`` is the same set calibrated on this experiment the way the
-model's authors calibrate it (the moduli's values fitted to the Mills
-diameters): the bending modulus halved, kb 0.01, every other modulus as
-published. With it both diameters lie inside the experimental range at
+``MILLS_MODULI`` is our calibration of that set on this experiment, done
+the way the model's authors calibrate theirs (moduli fitted to the Mills
+diameters): the bending modulus halved, kb 0.01 (not a published value),
+every other modulus as published. With it both diameters lie inside the experimental range at
 every force on rbc374, rbc642, rbc1002 and rbc2562 (doc/validation.md,
 which gives the scan: kb 0.0075-0.012 are inside on every mesh tried).
 """
@@ -47,8 +49,8 @@ import lbmd
 RBC_RADIUS = 3.91
 #: the red blood cell's moduli in the paper's units (um, us, 1e-15 kg)
 RBC_MODULI = dict(ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9)
-#: RBC_MODULI calibrated on Mills et al. (2004): the bending modulus halved
-#: (the module's docstring; doc/validation.md)
+#: our calibration of RBC_MODULI on Mills et al. (2004): the bending modulus
+#: halved, not a published value (the module's docstring; doc/validation.md)
 MILLS_MODULI = dict(RBC_MODULI, kb=0.01)
 #: the forces of Mills et al. (2004) at which the diameters were measured, in pN
 MILLS_FORCES_PN = (0, 16, 19, 30, 38, 47, 67, 88, 109, 130, 151, 173, 193)
