@@ -25,35 +25,25 @@ SharedSegment::SharedSegment(std::size_t bytes) {
     close(fd);
     return;
   }
-  m_data = static_cast<unsigned char*>(p);
-  m_size = total;
+  m_data = SharedMapping(static_cast<unsigned char*>(p), Unmap{total});
   m_fd = fd;
   std::random_device entropy;
   m_cookie = (static_cast<std::uint64_t>(entropy()) << 32) ^ entropy() ^
              static_cast<std::uint64_t>(getpid());
   // the pages are reserved now: a machine short of memory fails here, where
   // it is caught, not with a signal at the first halo
-  std::memset(m_data, 0, total);
-  std::memcpy(m_data, &m_cookie, sizeof m_cookie);
+  std::memset(data(), 0, total);
+  std::memcpy(data(), &m_cookie, sizeof m_cookie);
 }
 
-SharedSegment::~SharedSegment() {
-  close_fd();
-  if (m_data)
-    munmap(m_data, m_size);
+void Unmap::operator()(unsigned char* p) const noexcept {
+  munmap(p, size);
 }
 
 void SharedSegment::close_fd() {
   if (m_fd >= 0)
     close(m_fd);
   m_fd = -1;
-}
-
-void SharedSegment::swap(SharedSegment& other) noexcept {
-  std::swap(m_data, other.m_data);
-  std::swap(m_size, other.m_size);
-  std::swap(m_fd, other.m_fd);
-  std::swap(m_cookie, other.m_cookie);
 }
 
 PeerSegment::PeerSegment(long pid, int fd, std::size_t bytes, std::uint64_t cookie) {
@@ -76,18 +66,7 @@ PeerSegment::PeerSegment(long pid, int fd, std::size_t bytes, std::uint64_t cook
     munmap(p, total);
     return;
   }
-  m_data = static_cast<const unsigned char*>(p);
-  m_size = total;
-}
-
-PeerSegment::~PeerSegment() {
-  if (m_data)
-    munmap(const_cast<unsigned char*>(m_data), m_size);
-}
-
-void PeerSegment::swap(PeerSegment& other) noexcept {
-  std::swap(m_data, other.m_data);
-  std::swap(m_size, other.m_size);
+  m_data = SharedMapping(static_cast<unsigned char*>(p), Unmap{total});
 }
 
 } // namespace pyoif

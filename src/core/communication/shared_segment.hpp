@@ -16,9 +16,19 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <utility>
 
 namespace pyoif {
+
+/** Unmaps a mapping of `size` bytes (the deleter of SharedMapping). */
+struct Unmap {
+  std::size_t size = 0;
+  void operator()(unsigned char* p) const noexcept;
+};
+/** A mapping of a segment, unmapped when the last owner lets go of it
+ *  (move-only; null when none). */
+using SharedMapping = std::unique_ptr<unsigned char, Unmap>;
 
 /** This process's segment: `bytes` of zeroed memory after a header that
  *  holds the cookie. Empty (data() null) when it could not be made. */
@@ -27,26 +37,30 @@ public:
   static constexpr std::size_t header = 64;
   SharedSegment() = default;
   explicit SharedSegment(std::size_t bytes);
-  ~SharedSegment();
-  SharedSegment(SharedSegment&& other) noexcept { swap(other); }
+  ~SharedSegment() { close_fd(); }
+  // (the descriptor changes hands with the mapping)
+  SharedSegment(SharedSegment&& other) noexcept
+      : m_data(std::move(other.m_data)), m_fd(std::exchange(other.m_fd, -1)),
+        m_cookie(other.m_cookie) {}
   SharedSegment& operator=(SharedSegment&& other) noexcept {
-    SharedSegment(std::move(other)).swap(*this);
+    if (this != &other) {
+      close_fd();
+      m_data = std::move(other.m_data);
+      m_fd = std::exchange(other.m_fd, -1);
+      m_cookie = other.m_cookie;
+    }
     return *this;
   }
-  SharedSegment(const SharedSegment&) = delete;
-  SharedSegment& operator=(const SharedSegment&) = delete;
 
-  unsigned char* data() const { return m_data; }
-  std::size_t size() const { return m_size; }
+  unsigned char* data() const { return m_data.get(); }
+  std::size_t size() const { return m_data ? m_data.get_deleter().size : 0; }
   int fd() const { return m_fd; }
   std::uint64_t cookie() const { return m_cookie; }
   /** Closes the descriptor others open it through (the mapping stays). */
   void close_fd();
 
 private:
-  void swap(SharedSegment& other) noexcept;
-  unsigned char* m_data = nullptr;
-  std::size_t m_size = 0;
+  SharedMapping m_data;
   int m_fd = -1;
   std::uint64_t m_cookie = 0;
 };
@@ -57,22 +71,12 @@ class PeerSegment {
 public:
   PeerSegment() = default;
   PeerSegment(long pid, int fd, std::size_t bytes, std::uint64_t cookie);
-  ~PeerSegment();
-  PeerSegment(PeerSegment&& other) noexcept { swap(other); }
-  PeerSegment& operator=(PeerSegment&& other) noexcept {
-    PeerSegment(std::move(other)).swap(*this);
-    return *this;
-  }
-  PeerSegment(const PeerSegment&) = delete;
-  PeerSegment& operator=(const PeerSegment&) = delete;
 
-  const unsigned char* data() const { return m_data; }
+  const unsigned char* data() const { return m_data.get(); }
   explicit operator bool() const { return m_data != nullptr; }
 
 private:
-  void swap(PeerSegment& other) noexcept;
-  const unsigned char* m_data = nullptr;
-  std::size_t m_size = 0;
+  SharedMapping m_data; ///< mapped read-only
 };
 
 } // namespace pyoif
