@@ -171,7 +171,12 @@ void System::add_nonbonded_forces(Energies* e) {
     if (crossing_check && c.mol_i != c.mol_j)
       check_membrane_crossing(c, p.id[a], p.id[owner_b]);
     double pair_energy = 0.0;
-    const Vec3 f = pair_force(*params, c, e ? &pair_energy : nullptr);
+    Vec3 f;
+    try {
+      f = pair_force(*params, c, e ? &pair_energy : nullptr);
+    } catch (const SimulationInstability& error) {
+      rethrow_pair_error(error, p.id[a], p.id[owner_b], c, "");
+    }
     if (!own || own[a]) {
       energy += pair_energy;
       p.force[a] += f;
@@ -214,6 +219,45 @@ void System::check_membrane_crossing(const PairContext& c, int id_i, int id_j) c
       .in_cell(c.mol_i)
       .at_time(time)
       .with_value(inside_j);
+}
+
+void System::rethrow_pair_error(const SimulationInstability& e, int id_i, int id_j,
+                                const PairContext& c, const std::string& wall) const {
+  std::ostringstream msg;
+  msg << "particle " << id_i << " (cell mol_id " << c.mol_i << ") and ";
+  if (c.wall)
+    msg << "the " << wall << " constraint";
+  else
+    msg << "particle " << id_j << " (cell mol_id " << c.mol_j << ")";
+  msg << " at time " << time << ": " << e.what();
+  throw e.with_message(msg.str()).at_particle(id_i).in_cell(c.mol_i).at_time(time);
+}
+
+void System::update_contact_guards() {
+  const int n_types = nonbonded.n_types();
+  bool any = false;
+  for (int t1 = 0; t1 < n_types && !any; ++t1)
+    for (int t2 = 0; t2 < n_types && !any; ++t2)
+      any = nonbonded.entry_or_default(t1, t2).get<HardContact>().active();
+  if (!any)
+    return;
+  // the lightest particle of each type over all ranks (as the largest -mass)
+  std::vector<double> lightest(n_types, -HUGE_VAL);
+  const auto& p = particles;
+  for (std::size_t i = 0; i < p.n_local(); ++i)
+    if (p.type[i] < n_types)
+      lightest[p.type[i]] = std::max(lightest[p.type[i]], -p.mass[i]);
+  comm.allreduce_max(lightest);
+  for (int t1 = 0; t1 < n_types; ++t1)
+    for (int t2 = t1; t2 < n_types; ++t2) {
+      auto& params = nonbonded.at(t1, t2).get<HardContact>();
+      if (!params.active())
+        continue;
+      // a wall's type has no particles: the other type's mass counts
+      const double m = std::min(-lightest[t1], -lightest[t2]);
+      params.guard_gap = std::isfinite(m) ? HardContact::guard_for(params, m_time_step, m) : 0.0;
+      nonbonded.at(t2, t1).get<HardContact>().guard_gap = params.guard_gap;
+    }
 }
 
 void System::add_constraint_forces(Energies* e) {
@@ -311,7 +355,12 @@ void System::add_constraint_forces(Energies* e) {
         c.dist = std::abs(exact);
         c.mol_i = p.mol_id[i];
         c.normal_i = p.normal[i];
-        const Vec3 f = pair_force(*params, c, e ? &energy : nullptr);
+        Vec3 f;
+        try {
+          f = pair_force(*params, c, e ? &energy : nullptr);
+        } catch (const SimulationInstability& error) {
+          rethrow_pair_error(error, p.id[i], -1, c, constraint->shape->name());
+        }
         p.force[i] += f;
         constraint->total_force -= f;
       }
@@ -493,7 +542,8 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
       invalidate_forces();
   }
   if (constraint_shape_version() != m_shape_version_of_forces)
-    invalidate_forces(); // a constraint's shape changed (Union.add ...)
+    invalidate_forces();   // a constraint's shape changed (Union.add ...)
+  update_contact_guards(); // time step and masses as they are now
   auto& p = particles;
   if (!reuse_forces && (!m_forces_valid || recalc_forces)) {
     try { // the forces of the state the run starts from: named as of this step

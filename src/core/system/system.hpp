@@ -168,6 +168,13 @@ public:
   /** Throws SimulationInstability ("membrane_crossing") when the pair's two
    *  membrane nodes lie each behind the other's membrane. */
   void check_membrane_crossing(const PairContext& c, int id_i, int id_j) const;
+  /** hard_contact's guard gaps from the time step and the lightest particle
+   *  of each type (hard_contact.hpp), at the start of every run. */
+  void update_contact_guards();
+  /** A pair model's error (hard_contact's "contact_overrun") with the pair's
+   *  particles, cells (or the wall) and the time. */
+  [[noreturn]] void rethrow_pair_error(const SimulationInstability& e, int id_i, int id_j,
+                                       const PairContext& c, const std::string& wall) const;
   /** Called by integrate every 16 steps, where the particles are as at the
    *  end of a step; an exception it throws ends the run there, in the state
    *  of a run asked for that many steps (forces valid: a later run goes on

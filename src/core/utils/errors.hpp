@@ -29,7 +29,7 @@ inline void require(bool ok, const std::string& msg) {
  *  cause, a short name from the list in doc/engine.md ("lattice_nan",
  *  "negative_density", "mach", "particle_nan", "particle_jump",
  *  "triangle_collapsed", "triangle_inverted", "cell_blown_up",
- *  "volume_collapsed", "volume_exploded", "membrane_crossing",
+ *  "volume_collapsed", "volume_exploded", "membrane_crossing", "contact_overrun",
  *  "bond_broken", "wall_penetration", "outside_lattice", "coupling");
  *  the MD step and time (filled in by System::integrate where the thrower
  *  does not know them), the place (a lattice node, a particle, a cell's

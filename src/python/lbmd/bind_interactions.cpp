@@ -68,6 +68,19 @@ void bind_interactions(py::module_& m) {
       .def_readonly("offset", &MembraneCollision::Params::offset);
   bind_pair_model<MembraneCollision>(sys);
 
+  // the guard gap is derived at the start of every run, not a parameter
+  py::class_<HardContact::Params>(m, "HardContactParams")
+      .def(py::init([](double a, double n, double cutoff, double offset) {
+             return HardContact::Params{a, n, cutoff, offset, 0.0};
+           }),
+           py::arg("a"), py::arg("n"), py::arg("cutoff"), py::arg("offset"))
+      .def_readonly("a", &HardContact::Params::a)
+      .def_readonly("n", &HardContact::Params::n)
+      .def_readonly("cutoff", &HardContact::Params::cutoff)
+      .def_readonly("offset", &HardContact::Params::offset)
+      .def_readonly("guard_gap", &HardContact::Params::guard_gap);
+  bind_pair_model<HardContact>(sys);
+
   // the energy shift (U(cutoff) = 0) is derived, not a parameter
   py::class_<Morse::Params>(m, "MorseParams")
       .def(py::init(&Morse::make), py::arg("eps"), py::arg("alpha"), py::arg("rmin"),

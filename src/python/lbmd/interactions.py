@@ -81,6 +81,37 @@ class MembraneCollisionInteraction(NonBondedModel):
     _core_params = staticmethod(_lbmd.MembraneCollisionParams)
 
 
+class HardContactInteraction(NonBondedModel):
+    """A contact that cannot be crossed (doc/interactions.md): between nodes
+    of different cells (different mol_id), and between a node and a wall,
+    with the gap h = r - offset,
+    F(h) = a ((cutoff / h)^n - 1) for 0 < h < cutoff, zero beyond.
+
+    The force diverges as the gap closes, so with an offset at least the
+    other cell's covering radius (``oif.contact_settings`` chooses it) no
+    finite squeeze pushes a node through a membrane. At the start of every
+    run the gap where the contact's stiffness outruns the time step is
+    computed (``get_params()['guard_gap']``); a pair that closes below it
+    stops the run with SimulationInstability "contact_overrun"."""
+
+    name = "hard_contact"
+    _params = [Param("a", "float", check=positive, doc="force scale (force at h = cutoff / 2^(1/n) is a)"),
+               Param("n", "float", 2.0, check=positive, doc="exponent of the divergence"),
+               Param("cutoff", "float", check=positive, doc="range of the gap"),
+               Param("offset", "float", 0.0, check=non_negative, doc="node distance where the gap is 0")]
+    _core_params = staticmethod(_lbmd.HardContactParams)
+
+    def get_params(self):
+        p = getattr(self._system._core, "get_" + self.name)(*self._types)
+        out = {q.name: getattr(p, q.name) for q in self._params}
+        out["guard_gap"] = p.guard_gap
+        return out
+
+    def deactivate(self):
+        getattr(self._system._core, "set_" + self.name)(*self._types, self._core_params(a=0.0, n=2.0, cutoff=0.0,
+                                                                                        offset=0.0))
+
+
 class MorseInteraction(NonBondedModel):
     """Morse potential with ESPResSo's semantics (ESPResSo 4.2 user guide,
     "Morse interaction"): for r < cutoff
@@ -99,7 +130,8 @@ class MorseInteraction(NonBondedModel):
 #: name -> class of every non-bonded model, as attributes of a type pair
 NONBONDED_MODELS = {SoftSphereInteraction.name: SoftSphereInteraction,
                     MembraneCollisionInteraction.name: MembraneCollisionInteraction,
-                    MorseInteraction.name: MorseInteraction}
+                    MorseInteraction.name: MorseInteraction,
+                    HardContactInteraction.name: HardContactInteraction}
 
 
 def register_nonbonded_model(cls):

@@ -4,6 +4,7 @@
 // src/python/lbmd/bind_interactions.cpp, and add its Python name in lbmd/interactions.py.
 #pragma once
 
+#include "interactions/nonbonded/hard_contact.hpp"
 #include "interactions/nonbonded/membrane_collision.hpp"
 #include "interactions/nonbonded/morse.hpp"
 #include "interactions/nonbonded/soft_sphere.hpp"
@@ -12,6 +13,6 @@
 
 namespace pyoif {
 
-using NonbondedModels = std::tuple<SoftSphere, MembraneCollision, Morse>;
+using NonbondedModels = std::tuple<SoftSphere, MembraneCollision, Morse, HardContact>;
 
 } // namespace pyoif
