@@ -17,7 +17,7 @@ inline std::uint64_t mix64(std::uint64_t z) {
 }
 
 /** Stream identifiers, so that different consumers of one seed never share numbers. */
-enum class Stream : std::uint64_t { langevin = 1, lb_coupling = 2, lb_fluid = 3, seeding = 4 };
+enum class Stream : std::uint64_t { langevin = 1, lb_coupling = 2, lb_fluid = 3, seeding = 4, packing = 5 };
 
 struct Key {
   std::uint64_t seed, stream, counter, key;

@@ -909,19 +909,22 @@ class OifCell:
 
     ``OifCell(cell_type, origin, particle_type, particle_mass=1.0,
     rotate=None, exclusion_neighbours=True, self_cell_cutoff=None,
-    rotation_ids=())``
+    rotation_ids=(), check_overlaps=True)``
 
     origin: where the mesh's (0, 0, 0) goes; rotate: angles about x, y, z
     (PyOIF's convention); exclusion_neighbours: True (PyOIF: first and second
     mesh neighbours), False, or the number of edge rings to exclude from
     self-cell contacts; self_cell_cutoff: also exclude node pairs closer than
     this in the relaxed mesh (so a self-cell soft sphere with this cutoff is
-    silent in the relaxed shape). Each cell gets its own mol_id (``cell_id``),
-    so cells of one particle type still collide with each other.
+    silent in the relaxed shape); check_overlaps: warn (OverlapWarning) when
+    the new cell overlaps a cell or wall (False: the caller has checked, as
+    oif.pack_cells does; the test costs a pass over every cell). Each cell
+    gets its own mol_id (``cell_id``), so cells of one particle type still
+    collide with each other.
     """
 
     def __init__(self, cell_type=None, origin=None, particle_type=None, particle_mass=1.0, rotate=None,
-                 exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=()):
+                 exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=(), check_overlaps=True):
         owner = "OifCell"
         # every argument is checked before anything is added to the system
         if not isinstance(cell_type, OifCellType):
@@ -948,7 +951,10 @@ class OifCell:
             raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
         pos = cell_type.mesh._placed_positions(origin, rotate)
         check_periodic_extent(owner, system, pos, cell_type.mesh.max_edge_length())
-        _warn_overlaps(owner, system, pos, cell_type.mesh._topo.triangles, cell_id)
+        if not isinstance(check_overlaps, (bool, np.bool_)):
+            raise TypeError(f"{owner}: parameter 'check_overlaps' must be True or False, got {check_overlaps!r}")
+        if check_overlaps:
+            _warn_overlaps(owner, system, pos, cell_type.mesh._topo.triangles, cell_id)
         self.cell_type = cell_type
         self.system = system
         self.cell_id = cell_id

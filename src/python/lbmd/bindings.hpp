@@ -13,6 +13,7 @@ void bind_shapes(pybind11::module_& m);
 void bind_lb(pybind11::module_& m);
 void bind_oif(pybind11::module_& m);
 void bind_checkpoint(pybind11::module_& m);
+void bind_packing(pybind11::module_& m);
 
 /** Called first by every collective query (particle properties, the
  *  fluid's nodes, analysis): under mpirun a non-blocking barrier of all

@@ -50,4 +50,5 @@ PYBIND11_MODULE(_lbmd, m) {
   pyoif::python::bind_lb(m);
   pyoif::python::bind_oif(m);
   pyoif::python::bind_checkpoint(m);
+  pyoif::python::bind_packing(m);
 }

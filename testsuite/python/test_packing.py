@@ -1,0 +1,118 @@
+"""oif.pack_cells (doc/oif.md, "Packing cells"): rigid force-biased growth.
+Red cells (rbc374) packed to haematocrit 0.45 in a periodic box and mixed
+with small spheres between two walls: every cell at its reference volume
+and surface (rigid: to round-off), no node inside another cell (winding
+numbers, computed here independently of the packer's own check), every
+node at least the clearance from the other cells' nodes and from the
+walls, the haematocrit reached, the same seed giving the same placements,
+and the errors for an impossible packing and for bad input."""
+import unittest
+
+import numpy as np
+
+import lbmd
+import oif
+from lbmd import shapes
+from oif.oif_classes import _winding
+
+
+def rbc(system, **kw):
+    return oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(3.91,) * 3, ks=0.005, kb=0.02,
+                           kal=0.007, kag=0.7, kv=0.9, normal=True, **kw)
+
+
+def nodes_inside_other_cells(cells, box, periodic):
+    """Nodes of each cell inside another (winding number > 1/2), over the
+    other cell's image nearest to it."""
+    pos = [c.mesh.positions() for c in cells]
+    centres = [p.mean(axis=0) for p in pos]
+    inside = 0
+    for i, pi in enumerate(pos):
+        for j, pj in enumerate(pos):
+            if i == j:
+                continue
+            d = centres[i] - centres[j]
+            shift = np.where(periodic, box * np.round(d / box), 0.0)
+            q = pj + shift
+            if np.linalg.norm(d - shift) > 9.0:
+                continue
+            lo, hi = q.min(axis=0), q.max(axis=0)
+            cand = pi[np.all((pi > lo) & (pi < hi), axis=1)]
+            if len(cand):
+                inside += int(np.count_nonzero(_winding(cand, q, cells[j].cell_type.mesh._topo.triangles) > 0.5))
+    return inside
+
+
+class TestPackCells(unittest.TestCase):
+
+    def test_periodic_box_at_045(self):
+        s = lbmd.System(box_l=[20.0, 20.0, 20.0])
+        ct = rbc(s)
+        cells = oif.pack_cells(s, ct, haematocrit=0.45, seed=3)
+        r = cells.report
+        self.assertTrue(r["converged"])
+        self.assertEqual(len(cells), round(0.45 * 8000 / ct.volume0))
+        self.assertAlmostEqual(r["haematocrit"], len(cells) * ct.volume0 / 8000, places=12)
+        self.assertGreater(r["haematocrit"], 0.445)
+        self.assertEqual(r["nodes_inside_cells"], 0)
+        self.assertEqual(nodes_inside_other_cells(cells, np.array(s.box_l), np.array([True] * 3)), 0)
+        offset = oif.contacts.contact_offset(ct)
+        self.assertGreaterEqual(r["min_node_distance"], offset)
+        for c in cells:  # rigid: the reference shape to round-off
+            self.assertAlmostEqual(c.volume() / ct.volume0, 1.0, places=9)
+            self.assertAlmostEqual(c.surface() / ct.surface0, 1.0, places=9)
+
+    def test_same_seed_same_cells(self):
+        out = []
+        for _ in range(2):
+            s = lbmd.System(box_l=[20.0, 20.0, 20.0])
+            out.append(oif.pack_cells(s, rbc(s), haematocrit=0.3, seed=7, create=False))
+        self.assertEqual(len(out[0]), len(out[1]))
+        for (ta, oa, ra), (tb, ob, rb) in zip(*out):
+            self.assertEqual(ta, tb)
+            np.testing.assert_array_equal(oa, ob)
+            np.testing.assert_array_equal(ra, rb)
+
+    def test_two_types_between_walls(self):
+        s = lbmd.System(box_l=[24.0, 24.0, 14.0])
+        s.periodicity = [True, True, False]
+        walls = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-13.0)]
+        red = rbc(s)
+        small = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(1.5,) * 3, ks=0.05, kb=0.1,
+                                kal=0.01, kag=0.7, kv=0.9, normal=True)
+        cells = oif.pack_cells(s, [red, small], haematocrit=0.35, fractions=[0.85, 0.15], boundaries=walls,
+                               particle_types=[0, 1], seed=2, rotation_axis=[0, 0, 1])
+        r = cells.report
+        self.assertTrue(r["converged"])
+        self.assertEqual(r["nodes_inside_cells"], 0)
+        self.assertEqual(nodes_inside_other_cells(cells, np.array(s.box_l), np.array([True, True, False])), 0)
+        self.assertGreaterEqual(r["min_wall_distance"], r["wall_clearance"] * 0.9)
+        z = np.concatenate([c.mesh.positions()[:, 2] for c in cells])
+        self.assertGreater(z.min(), 1.0)
+        self.assertLess(z.max(), 13.0)
+        kinds = [c.cell_type is small for c in cells]
+        self.assertEqual(sum(kinds), r["counts"][1])
+        self.assertGreater(r["counts"][1], 0)
+        v = sum(c.cell_type.volume0 for c in cells) / r["fluid_volume"]
+        self.assertAlmostEqual(v, r["haematocrit"], places=9)
+        self.assertGreater(v, 0.34)
+
+    def test_errors(self):
+        s = lbmd.System(box_l=[20.0, 20.0, 20.0])
+        ct = rbc(s)
+        with self.assertRaisesRegex(ValueError, "haematocrit"):
+            oif.pack_cells(s, ct, haematocrit=1.2)
+        with self.assertRaisesRegex(TypeError, "exactly one"):
+            oif.pack_cells(s, ct)
+        with self.assertRaisesRegex(oif.PackingError, "cannot be packed"):
+            oif.pack_cells(s, ct, haematocrit=0.8)
+        with self.assertRaisesRegex(oif.PackingError, r"reached .* haematocrit"):
+            oif.pack_cells(s, ct, haematocrit=0.6, seed=1, max_iterations=300)
+        self.assertEqual(len(s.part), 0)  # nothing created by a failed packing
+        oif.OifCell(cell_type=ct, particle_type=0, origin=[10, 10, 10])
+        with self.assertRaisesRegex(ValueError, "already holds 374 particles"):
+            oif.pack_cells(s, ct, haematocrit=0.2)
+
+
+if __name__ == "__main__":
+    unittest.main()
