@@ -38,7 +38,8 @@ import numpy as np
 from lbmd.validation import is_whole_number as _is_int
 
 from . import mesh_io
-from .seeding import (SeedingError, _count, _per_type, _ptype, _region, fluid_volume, rotation_to_angles)
+from .seeding import (SeedingError, _count, _per_type, _ptype, _region, _shares, _signed_distances, _unit_axis, fluid_volume,
+                      rotation_to_angles)
 
 
 class PackingError(SeedingError):
@@ -150,16 +151,7 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         raise TypeError(f"pack_cells: parameter 'max_iterations' must be an integer >= 1, got {max_iterations!r}")
     if not isinstance(create, (bool, np.bool_)):
         raise TypeError(f"pack_cells: parameter 'create' must be True or False, got {create!r}")
-    axis = None
-    if rotation_axis is not None:
-        try:
-            axis = np.asarray(rotation_axis, dtype=float)
-        except (TypeError, ValueError):
-            axis = np.zeros(0)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.linalg.norm(axis) > 0:
-            raise ValueError(f"pack_cells: parameter 'rotation_axis' must be None or a non-zero vector of 3 "
-                             f"finite numbers, got {rotation_axis!r}")
-        axis = axis / np.linalg.norm(axis)
+    axis = _unit_axis("pack_cells", rotation_axis)
     shapes = _shapes(boundaries)
     if len(system.part):
         raise ValueError(f"pack_cells: the system already holds {len(system.part)} particles, which the packing "
@@ -181,13 +173,7 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         if (isinstance(haematocrit, (bool, np.bool_)) or not isinstance(haematocrit, (int, float, np.floating))
                 or not 0 < haematocrit < 1):
             raise ValueError(f"pack_cells: parameter 'haematocrit' must be a number in (0, 1), got {haematocrit!r}")
-        try:
-            fr = np.ones(k) / k if fractions is None else np.asarray(fractions, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"pack_cells: parameter 'fractions' needs {k} numbers, got {fractions!r}") from None
-        if fr.shape != (k,) or not np.all(np.isfinite(fr)) or np.any(fr < 0) or fr.sum() <= 0:
-            raise ValueError(f"pack_cells: parameter 'fractions' needs {k} finite values >= 0, got {fractions!r}")
-        fr = fr / fr.sum()
+        fr = _shares("pack_cells", fractions, k)
         counts = [int(round(haematocrit * v_fluid * f / v)) for f, v in zip(fr, vols)]
     n = int(sum(counts))
     if n == 0:
@@ -217,7 +203,6 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     order = sorted((i for i in range(k) for _ in range(counts[i])), key=lambda i: -vols[i])
     centres = np.empty((n, 3))
     quats = np.empty((n, 4))
-    from .seeding import _signed_distances
     dist_fns = [_signed_distances(s) for s in shapes]
     filled = 0
     for _ in range(1000):

@@ -193,6 +193,31 @@ def _length(name, x):
     return float(x)
 
 
+def _unit_axis(owner, rotation_axis):
+    """None, or rotation_axis as a unit vector (a non-zero vector of 3 finite numbers)."""
+    if rotation_axis is None:
+        return None
+    try:
+        axis = np.asarray(rotation_axis, dtype=float)
+    except (TypeError, ValueError):
+        axis = np.zeros(0)
+    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.linalg.norm(axis) > 0:
+        raise ValueError(f"{owner}: parameter 'rotation_axis' must be None or a non-zero vector of 3 "
+                         f"finite numbers, got {rotation_axis!r}")
+    return axis / np.linalg.norm(axis)
+
+
+def _shares(owner, fractions, k):
+    """The volume shares of k cell types (default equal), normalised to 1."""
+    try:
+        fr = np.ones(k) / k if fractions is None else np.asarray(fractions, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: parameter 'fractions' needs {k} numbers, got {fractions!r}") from None
+    if fr.shape != (k,) or not np.all(np.isfinite(fr)) or np.any(fr < 0) or fr.sum() <= 0:
+        raise ValueError(f"{owner}: parameter 'fractions' needs {k} finite values >= 0, got {fractions!r}")
+    return fr / fr.sum()
+
+
 def _min_width(nodes):
     """Smallest extent of the point set over many directions (close to the
     narrowest width of the shape in any orientation)."""
@@ -295,15 +320,7 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
         raise TypeError(f"seed_cells: parameter 'max_attempts' must be an integer >= 1, got {max_attempts!r}")
     seed = None if seed is None else int(seed)
     max_attempts = int(max_attempts)
-    if rotation_axis is not None:
-        try:
-            axis = np.asarray(rotation_axis, dtype=float)
-        except (TypeError, ValueError):
-            axis = np.zeros(0)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.linalg.norm(axis) > 0:
-            raise ValueError(f"seed_cells: parameter 'rotation_axis' must be None or a non-zero vector of 3 "
-                             f"finite numbers, got {rotation_axis!r}")
-        rotation_axis = axis / np.linalg.norm(axis)
+    rotation_axis = _unit_axis("seed_cells", rotation_axis)
     margin, gap = _length("margin", margin), _length("gap", gap)
     if boundaries is None:
         boundaries = []
@@ -358,13 +375,7 @@ def seed_cells(system, cell_types, counts=None, haematocrit=None, fractions=None
         if (not isinstance(haematocrit, numbers.Real) or isinstance(haematocrit, (bool, np.bool_))
                 or not 0 < haematocrit < 1):
             raise ValueError(f"seed_cells: parameter 'haematocrit' must be in (0, 1) (a number), got {haematocrit!r}")
-        try:
-            fr = np.ones(k) / k if fractions is None else np.asarray(fractions, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"seed_cells: parameter 'fractions' needs {k} numbers, got {fractions!r}") from None
-        if fr.shape != (k,) or not np.all(np.isfinite(fr)) or np.any(fr < 0) or fr.sum() <= 0:
-            raise ValueError(f"seed_cells: parameter 'fractions' needs {k} finite values >= 0, got {fractions!r}")
-        fr = fr / fr.sum()
+        fr = _shares("seed_cells", fractions, k)
         v_fluid = fluid_volume(system, boundaries, (lo, hi))
         counts = [int(round(haematocrit * v_fluid * f / v)) for f, v in zip(fr, vols)]
         if sum(counts) == 0:
