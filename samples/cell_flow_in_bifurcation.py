@@ -122,11 +122,9 @@ STIFFEST_RBC = 60.0
 # moduli and failed at 200x (doc/accuracy.md): the rare cell of the fast
 # --small flow stays below that (3.7x the RBC's there)
 STIFFEST = 100.0
-# node-wall and cell-cell repulsion (soft sphere a / r^n within cutoff), in
-# lattice units; the cells' contact as doc/accuracy.md advises (a cutoff
-# longer than the mesh's edges, a >= 0.1)
-WALL_CONTACT = dict(a=0.02, n=1.5, cutoff=1.0)
-CELL_CONTACT = dict(a=0.1, n=1.2, cutoff=1.0)
+# node-wall and cell-cell contacts: the advised hard_contact
+# (oif.set_contacts: a repulsion that diverges as the gap closes, offset from
+# the meshes, doc/interactions.md), stiffened with the membranes
 
 # --- geometry (m): channel along x, periodic; branches between SPLIT and JOIN
 CHANNEL_LENGTH, BOX_WIDTH = 160e-6, 40e-6
@@ -402,13 +400,7 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
             print(f"note: {n_rbc} randomly oriented cells did not fit ({random_failed}); seeded them lying "
                 f"flat between the walls instead (--orientation flat)")
     system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
-    for t in set(ptypes):
-        system.non_bonded_inter[t, 10].soft_sphere.set_params(
-            a=WALL_CONTACT["a"], n=WALL_CONTACT["n"], cutoff=WALL_CONTACT["cutoff"], offset=0.0)
-        for u in set(ptypes):
-            if u >= t:
-                system.non_bonded_inter[t, u].membrane_collision.set_params(
-                    a=CELL_CONTACT["a"], n=CELL_CONTACT["n"], cutoff=CELL_CONTACT["cutoff"], offset=0.0)
+    oif.set_contacts(system, types, particle_types=ptypes, wall_types=10, scale=stiffness)
 else:
     system, lbf, cells = resumed.system, resumed.lbf, resumed.cells
     force, reached, flow_share = (resumed.state[k] for k in ("force", "reached", "flow_share"))

@@ -131,11 +131,8 @@ rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(UNITS.to
                       normal=True, **moduli)
 gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
 system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
-# contacts stiffer with the membranes (the flagship's
-# --small: a 0.1 with membranes 27x; 3x that between cells, which bunch
-# up before the throat and crossed at 0.1)
-system.non_bonded_inter[0, 10].soft_sphere.set_params(a=0.02 * stiffness / 27.0, n=1.5, cutoff=1.0)
-system.non_bonded_inter[0, 0].membrane_collision.set_params(a=0.3 * stiffness / 27.0, n=1.2, cutoff=1.0)
+# contacts: the advised hard_contact (cannot be crossed), stiffer with the membranes
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=stiffness)
 inlet_box = ([3.0, 1.0, 1.0], [18.0, width - 1.0, H + 1.0])
 flow = oif.CellFlow(system, rbc, inlet=inlet_box, outlet=length - 5.0, haematocrit=args.haematocrit,
                     boundaries=[device], seed=args.seed, particle_mass=gamma * system.time_step / 0.3)

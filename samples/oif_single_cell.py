@@ -56,8 +56,8 @@ for w in walls:
 for name, z in (("bottom", 0.0), ("top", box[2] - 1.0)):
     slab = SimpleNamespace(corner=[0.0, 0.0, z], a=[box[0], 0, 0], b=[0, box[1], 0], c=[0, 0, 1.0])
     oif.output_vtk_rhomboid(slab, os.path.join(args.output, f"wall_{name}.vtk"))
-# node-wall repulsion (model eq. 8)
-system.non_bonded_inter[0, 10].soft_sphere.set_params(a=0.0001, n=1.2, cutoff=0.5, offset=0.0)
+# node-wall contact: the advised hard_contact (diverges as the gap closes)
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10)
 
 print("cycle  time     centre                 velocity_x   volume     surface")
 for i in range(args.cycles + 1):

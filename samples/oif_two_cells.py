@@ -55,9 +55,9 @@ for name, z in (("bottom", 0.0), ("top", box[2] - 1.0)):
     slab = SimpleNamespace(corner=[0.0, 0.0, z], a=[box[0], 0, 0], b=[0, box[1], 0], c=[0, 0, 1.0])
     oif.output_vtk_rhomboid(slab, os.path.join(args.output, f"wall_{name}.vtk"))
 
-# contacts: node-wall soft sphere (eq. 8), cell-cell membrane collision (eq. 9)
-system.non_bonded_inter[0, 10].soft_sphere.set_params(a=0.0002, n=1.2, cutoff=0.6, offset=0.0)
-system.non_bonded_inter[0, 0].membrane_collision.set_params(a=0.002, n=2.0, cutoff=0.6, offset=0.0)
+# contacts: the advised hard_contact between the cells and with the walls
+# (a repulsion that diverges as the gap closes: doc/interactions.md)
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10)
 
 print("cycle   time    centre0 x,y,z          centre1 x,y,z         min distance  volumes")
 for i in range(args.cycles + 1):

@@ -70,12 +70,47 @@ class CheckSettings(unittest.TestCase):
         s, _, kept = scene(contact=None)
         self.assertIn("contact between cell types 0 and 0", warned(s.check_settings()))
 
+    def test_membrane_limit_tells_the_truth(self):
+        # the membrane check runs one cell alone at the scene's dt, mass and
+        # friction: kb 1000 x the paper's at dt 0.1 is flagged, and the scene
+        # itself does blow up
+        s, _, kept = scene(kb=20.0, contact=None, cells=1)
+        self.assertIn("time step against the membrane (kb, kal)", warned(s.check_settings()))
+        with self.assertRaises(lbmd.SimulationInstability):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                s.integrator.run(400)
+        # ESPResSo 4.2.2's oif_volume_conservation scene (sphere393 of radius
+        # 12, kb = kal = 1, Langevin friction 0.7, dt 0.4, stretched 1.5 x):
+        # it runs stably, and nothing is flagged
+        import os
+        data = os.path.join(os.environ.get("PYOIF_TEST_DATA", os.path.join(os.path.dirname(
+            os.path.abspath(__file__)), "..", "data")), "meshes")
+        s = lbmd.System(box_l=[50.0] * 3)
+        s.time_step = 0.4
+        s.cell_system.skin = 0.5
+        ct = oif.OifCellType(os.path.join(data, "sphere393nodes.dat"), os.path.join(data, "sphere393triangles.dat"),
+                             system=s, kslin=1.0, kb=1.0, kal=1.0, kag=0.1, kv=0.1, check_orientation=False,
+                             resize=(3.0, 3.0, 3.0))
+        cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[25.0] * 3)
+        parts = s.part.all()
+        parts.pos = (parts.pos - 25.0) * 1.5 * [0.96, 1.05, 1.02] + 25.0
+        s.thermostat.set_langevin(kT=0, gamma=0.7, seed=42)
+        self.assertEqual(s.check_settings().warnings(), [], str(s.check_settings()))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            s.integrator.run(450)
+        self.assertEqual([str(w.message) for w in caught if issubclass(w.category, SettingsWarning)], [])
+        self.assertAlmostEqual(cell.diameter(), 24.0, delta=0.1)
+
     def test_first_run_warns_once(self):
         s, _, kept = scene(contact=None)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            s.integrator.run(2)
-            s.integrator.run(2)
+            s.integrator.run(2)  # shorter than SETTINGS_CHECK_MIN_STEPS: not yet checked
+            self.assertEqual([w for w in caught if issubclass(w.category, SettingsWarning)], [])
+            s.integrator.run(10)
+            s.integrator.run(10)
         mine = [w for w in caught if issubclass(w.category, SettingsWarning)]
         self.assertEqual(len(mine), 1, [str(w.message) for w in caught])
         self.assertIn("pass through each other", str(mine[0].message))

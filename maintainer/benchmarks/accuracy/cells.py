@@ -563,8 +563,89 @@ def study_contacts(quick, layers_list=None, strengths=None, series=None, t_end=N
     return rows
 
 
+def study_hard_contacts(quick, meshes=None, targets=None, push=2.0, t_end=None, seed=1):
+    """The same Couette scene with the advised hard_contact
+    (oif.contact_settings: a 0.01, n 1, cutoff 0.5, offset the mesh's
+    covering radius; walls offset 0) instead of membrane_collision, the
+    cells placed by oif.pack_cells (flat discs, rotation_axis z) at each
+    target haematocrit, every node pushed towards the bottom wall (`push` nN
+    per cell), per mesh. The engine's crossing check stays on: a crossing or
+    a contact_overrun is the outcome."""
+    meshes = meshes or (("rbc374",) if quick else ("rbc374", "rbc642", "rbc1002"))
+    targets = targets or ((0.3,) if quick else (0.05, 0.15, 0.3, 0.45))
+    t_end = t_end or (50.0 if quick else 200.0)
+    lx, ly, lz = CONTACT_BOX
+    u_wall = 0.1
+    rows = []
+    for mesh in meshes:
+        for target in targets:
+            s = lbmd.System(box_l=[lx, ly, lz])
+            s.periodicity = [True, True, False]
+            s.time_step = 0.1
+            s.cell_system.skin = 0.4
+            walls = [shapes.Wall(normal=[0, 0, 1], dist=WALL), shapes.Wall(normal=[0, 0, -1], dist=-(lz - WALL))]
+            ct = cell_type(s, mesh)
+            t0 = cpu()
+            try:
+                cells = oif.pack_cells(s, ct, haematocrit=target, boundaries=walls, rotation_axis=(0, 0, 1),
+                                       seed=seed, max_iterations=6000)
+            except oif.PackingError as err:
+                rows.append({"study": "hard_contacts", "mesh": mesh, "nodes": n_nodes(mesh), "target": target,
+                             "haematocrit": float("nan"), "outcome": "not packed: " + str(err)[:80]})
+                print(f"hard contacts {mesh} H {target}: not packed", flush=True)
+                continue
+            pack_s = cpu() - t0
+            lbf = lb.LBFluid(agrid=1.0, dens=DENS, visc=VISC, tau=0.1)
+            s.actors.add(lbf)
+            s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[0], velocity=[-u_wall, 0, 0]))
+            s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[1], velocity=[u_wall, 0, 0]))
+            for w in walls:
+                s.constraints.add(shape=w, particle_type=10, penetrable=False)
+            for k in range(int(lz)):
+                z = k + 0.5
+                if WALL < z < lz - WALL:
+                    u = u_wall * (2 * (z - WALL) / (lz - 2 * WALL) - 1)
+                    lbf[:, :, k].velocity = np.tile([u, 0.0, 0.0], (int(lx), int(ly), 1))
+            settings = oif.set_contacts(s, ct, particle_types=0, wall_types=10)
+            n = ct.mesh.get_n_nodes()
+            for c in cells:
+                c.set_force([0.0, 0.0, -push / n])
+            s.thermostat.set_lb(LB_fluid=lbf, gamma=ct.suggest_LBgamma(visc=VISC, dens=DENS))
+            h_real = cells.report["haematocrit"]
+            steps = int(t_end / 0.1)
+            deepest, inside_max, crossed_max, outcome, cost = 0.0, 0, 0, "ran", 0.0
+            vol_drift = surf_drift = 0.0
+            for sample in range(10):
+                t0 = cpu()
+                try:
+                    s.integrator.run(steps // 10)
+                except lbmd.SimulationInstability as err:
+                    outcome = f"{err.cause}: " + str(err).split("\n")[0][:100]
+                    cost += cpu() - t0
+                    break
+                cost += cpu() - t0
+                d, ins, cr = interpenetration(cells, s.box_l, np.array([True, True, False]))
+                deepest, inside_max, crossed_max = max(deepest, d), max(inside_max, ins), max(crossed_max, cr)
+                vol_drift = max(vol_drift, max(abs(c.volume() / ct.volume0 - 1) for c in cells))
+                surf_drift = max(surf_drift, max(abs(c.surface() / ct.surface0 - 1) for c in cells))
+            timings = s.integrator.timings() if hasattr(s.integrator, "timings") else {}
+            rows.append({"study": "hard_contacts", "mesh": mesh, "nodes": n_nodes(mesh), "target": target,
+                         "haematocrit": h_real, "cells": len(cells), "push_nN_per_cell": push,
+                         "a": settings["cell"]["a"], "n": settings["cell"]["n"], "cutoff": settings["cell"]["cutoff"],
+                         "offset": settings["cell"]["offset"], "t_end": t_end, "deepest_um": deepest,
+                         "nodes_inside_max": inside_max, "cells_crossed_max": crossed_max,
+                         "volume_drift_max": vol_drift, "surface_drift_max": surf_drift, "outcome": outcome,
+                         "pack_cpu_s": pack_s, "cpu_s": cost,
+                         "nonbonded_s": timings.get("non_bonded", float("nan")),
+                         "membrane_s": timings.get("membrane", float("nan"))})
+            print(f"hard contacts {mesh} H {h_real:.3f} ({len(cells)} cells): deepest {deepest:.3f} um, nodes inside "
+                  f"{inside_max}, volume drift {vol_drift:.4f}, surface {surf_drift:.4f}, {outcome[:70]}, "
+                  f"{cost:.1f} s (packing {pack_s:.1f} s)", flush=True)
+    return rows
+
+
 STUDIES = {"stretch": study_stretch, "flow": study_flow, "time": study_time, "gamma": study_gamma,
-           "stability": study_stability, "contacts": study_contacts}
+           "stability": study_stability, "contacts": study_contacts, "hard_contacts": study_hard_contacts}
 
 
 def same_columns(rows):

@@ -22,17 +22,18 @@ maintainer/benchmarks/accuracy_vs_cost.py) or a stated estimate:
 - the mesh's node count against the error of a cell's shape (stretched
   diameters, extents in flow) relative to rbc2562: rbc162 4-5 %, rbc374
   1.2-4.5 %, rbc642 0.5-1.3 %, rbc1002 0.2-1.4 %.
-- the time step against the membrane's stiffness (a free cell at node
-  mass 1): stable up to dt 0.81 for rbc374 and 0.10 for rbc1002 at the
-  paper's moduli (ks 0.005, kb 0.02, kal 0.007), falling as N^-2.1 with
-  the node count; for kb or kal raised above those, dt <= 0.05 k_paper / k
-  held at every point measured; ks hardly matters. The mass enters as
-  sqrt(m) (omega^2 = k / m; an estimate beyond the measured m = 1).
-  Coupled to the fluid (suggest_LBgamma's friction, gamma dt / m 0.15),
-  the friction damps the membrane's fastest modes: rbc374 and sphere642
-  with all five moduli raised together held 10^4 steps at dt = tau = 0.1
-  up to 100 x the paper's and failed at 200 x (rbc374) and 270 x
-  (sphere642), i.e. dt <= 10 k_paper / k for meshes up to 642 nodes.
+- the time step against the membrane's stiffness: measured for the scene
+  itself. The limit depends on the moduli, the mesh (its edge lengths),
+  the node mass and above all the friction on the nodes (doc/accuracy.md:
+  rbc374 at 100 x the paper's kal held dt 0.026 with friction 0.05 per
+  node; ESPResSo's sphere393 of radius 12 at kb = kal = 1 holds dt 0.4
+  with friction 0.7), so a table cannot cover every scene: one cell of
+  each type is run alone (membrane_trial: released at rest from a 1.1 x
+  stretched shape with noise of 3 % of its mean edge, TRIAL_STEPS steps,
+  Langevin friction equal to the scene's coupling or Langevin gamma, the
+  scene's node mass) at the scene's time step and at 1.5 x it; it warns
+  when the trial at the scene's own time step fails (every warning names
+  a setting that fails), and says "near the limit" when only 1.5 x fails.
 - the coupling: the fluid blew up where gamma N dt / (rho S agrid) reached
   1.4-2.1 (N nodes on the cell's surface S), whatever the mesh; advised
   below 1. gamma dt / m above about 1 makes particles overshoot too.
@@ -56,14 +57,9 @@ EDGE_PER_AGRID = (0.5, 2.0)
 GAMMA_DT_PER_MASS_MAX = 1.0
 #: shape error against rbc2562 (stretch and flow, largest of both) by nodes
 MESH_ERROR = ((162, 0.05), (374, 0.045), (642, 0.013), (1002, 0.014), (2562, 0.0))
-#: membrane time-step limit at the paper's moduli, node mass 1
-MEMBRANE_DT = ((374, 0.81), (1002, 0.10))
-PAPER_KB, PAPER_KAL = 0.02, 0.007
-#: dt <= factor * k_paper / k for kb, kal above the paper's: a free cell, and
-#: a cell coupled to the fluid (gamma dt / m >= COUPLED_KICK_MIN) of at most
-#: COUPLED_NODES_MAX nodes (measured 26 Nov 2026: 100x held, 200x failed)
-MEMBRANE_DT_FACTOR_FREE, MEMBRANE_DT_FACTOR_COUPLED = 0.05, 10.0
-COUPLED_KICK_MIN, COUPLED_NODES_MAX = 0.1, 642
+#: the membrane trial: steps, stretch, noise (share of the mean edge), and the
+#: factor on the time step that must still be stable
+TRIAL_STEPS, TRIAL_STRETCH, TRIAL_NOISE, TRIAL_MARGIN = 400, 1.1, 0.03, 1.5
 #: gamma N dt / (rho S agrid): measured fluid blow-up from 1.4
 COUPLING_ADVISED, COUPLING_FAILED = 1.0, 1.4
 #: membrane_collision's a from which cells stayed apart (with a reach longer
@@ -159,7 +155,7 @@ def _fluid_settings(system, fluid, report):
                           "(Poiseuille, Couette, coupling: doc/lb.md)"))
 
 
-def _cell_settings(system, fluid, gamma, report):
+def _cell_settings(system, fluid, gamma, langevin, report):
     try:
         import oif
     except ImportError:
@@ -197,26 +193,22 @@ def _cell_settings(system, fluid, gamma, report):
             f"shape (diameters, extents in flow) within about {100 * err:.1f} % of the finest mesh"
             if nodes < 2562 else "the finest mesh measured",
             "rbc1002 is within 0.2-1.4 % at a quarter of rbc2562's cost" if nodes > 1002 else ""))
-        # time step against the membrane (measured free-cell limits)
-        xs = np.log([p[0] for p in MEMBRANE_DT])
-        ys = np.log([p[1] for p in MEMBRANE_DT])
-        slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
-        dt_paper = math.exp(ys[0] + slope * (math.log(nodes) - xs[0]))
-        limits = [dt_paper]
-        coupled = bool(gamma) and fluid is not None and gamma * dt / mass >= COUPLED_KICK_MIN \
-            and nodes <= COUPLED_NODES_MAX
-        factor = MEMBRANE_DT_FACTOR_COUPLED if coupled else MEMBRANE_DT_FACTOR_FREE
-        if cell_type.kb > PAPER_KB:
-            limits.append(factor * PAPER_KB / cell_type.kb)
-        if cell_type.kal > PAPER_KAL:
-            limits.append(factor * PAPER_KAL / cell_type.kal)
-        dt_max = min(limits) * math.sqrt(mass)
+        # time step against the membrane: measured on the spot, one cell of
+        # this type alone at the scene's time step, node mass and friction
+        # (membrane_trial), and at TRIAL_MARGIN x the time step
+        friction = (gamma or 0.0) + langevin  # the nodes' friction: coupling and Langevin
+        at_dt = membrane_trial(cell_type, dt, mass, friction)
+        at_margin = membrane_trial(cell_type, TRIAL_MARGIN * dt, mass, friction) if at_dt == "stable" else at_dt
         report.append(Setting(
             f"{label}: time step against the membrane (kb, kal)", f"{dt:.3g}",
-            f"measured stable up to about {dt_max:.3g} ({'coupled to the fluid' if coupled else 'free cell'})",
-            "stable" if dt <= 0.5 * dt_max else "near or past the membrane's stability limit",
-            f"the membrane alone would allow a time step of about {0.5 * dt_max:.3g}"
-            if dt < 0.1 * dt_max else "", ok=dt <= 0.5 * dt_max))
+            f"a cell of this type alone, released from a stretched, noisy shape, at this time step, "
+            f"node mass {mass:.3g} and friction {friction:.3g}: {at_dt} at dt, {at_margin} at {TRIAL_MARGIN:g} dt",
+            f"stable with a factor {TRIAL_MARGIN:g} to spare" if at_margin == "stable" else
+            (f"stable, but near the limit (unstable at {TRIAL_MARGIN:g} x the time step: keep it)"
+             if at_dt == "stable" else
+             "past the membrane's stability limit: lower the time step or the moduli (kb, kal, kvisc), "
+             "or raise the node mass"),
+            ok=at_dt == "stable"))
         if gamma:
             kick = gamma * dt / mass
             report.append(Setting(
@@ -252,7 +244,20 @@ def _cell_settings(system, fluid, gamma, report):
         for i, a in enumerate(cell_types):
             for b in cell_types[i:]:
                 pair = system.non_bonded_inter[a, b]
-                if pair.membrane_collision.is_active():
+                if pair.hard_contact.is_active():
+                    p = pair.hard_contact.get_params()
+                    pair_types = [ct for ct, members in types.values()
+                                  if any(int(members[0].particle_type) == t for t in (a, b))]
+                    need = oif.contacts.contact_offset(pair_types or [ct for ct, _ in types.values()])
+                    report.append(Setting(
+                        f"contact between cell types {a} and {b}",
+                        f"hard_contact a {p['a']:g}, n {p['n']:g}, cutoff {p['cutoff']:g}, offset {p['offset']:g}",
+                        f"offset >= the meshes' covering radius {need:.3g} (no node passes a membrane)",
+                        "cannot be crossed; a push the time step cannot follow stops with contact_overrun"
+                        if p["offset"] >= need - 1e-9 else
+                        "a node can pass through the other cell's largest triangles: raise the offset "
+                        "(oif.contact_settings)", ok=p["offset"] >= need - 1e-9))
+                elif pair.membrane_collision.is_active():
                     p = pair.membrane_collision.get_params()
                     reach = p["cutoff"] + p["offset"]
                     edge = max(float(np.max(ct.r0)) for ct, _ in types.values())
@@ -269,7 +274,67 @@ def _cell_settings(system, fluid, gamma, report):
                     report.append(Setting(
                         f"contact between cell types {a} and {b}", "none", "a pair contact",
                         "the cells pass through each other unseen (no crossing check without a "
-                        "contact): add membrane_collision (cell types with normal=True)", ok=False))
+                        "contact): add the advised hard_contact (oif.set_contacts)", ok=False))
+
+
+_TRIALS = {}
+
+
+def membrane_trial(cell_type, dt, mass, friction, steps=None):
+    """'stable' or how one cell of this type, alone in a System of its own,
+    failed in `steps` steps at time step dt, node mass and Langevin friction
+    (kT 0): released at rest from a TRIAL_STRETCH x stretched shape with
+    noise of TRIAL_NOISE of its mean edge. Unstable: a SimulationInstability,
+    non-finite positions, or the elastic energy grown tenfold. Remembered
+    per (type, dt, mass, friction)."""
+    import os
+    import tempfile
+    import oif
+    from . import System, SimulationInstability
+    steps = steps or TRIAL_STEPS
+    key = (id(cell_type), float(dt), float(mass), float(friction), steps)
+    if key in _TRIALS:
+        return _TRIALS[key]
+    nodes = np.asarray(cell_type.mesh._nodes, dtype=float)
+    nodes = nodes - nodes.mean(axis=0)
+    side = 3.0 * float(np.ptp(nodes, axis=0).max()) + 10.0
+    s = System(box_l=[side] * 3)
+    s.__dict__["_settings_checked"] = True  # the trial's own first run checks nothing
+    s.time_step = dt
+    s.cell_system.skin = 0.4
+    with tempfile.TemporaryDirectory() as tmp:
+        nf, tf = os.path.join(tmp, "nodes.dat"), os.path.join(tmp, "triangles.dat")
+        np.savetxt(nf, nodes, fmt="%.17g")
+        np.savetxt(tf, cell_type.mesh._topo.triangles, fmt="%d")
+        ct = oif.OifCellType(nf, tf, system=s, ks=cell_type.ks, kslin=cell_type.kslin, kb=cell_type.kb,
+                             kal=cell_type.kal, kag=cell_type.kag, kv=cell_type.kv, kvisc=cell_type.kvisc,
+                             normal=cell_type.normal, check_orientation=False)
+    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[0.5 * side] * 3, particle_mass=mass,
+                       check_overlaps=False)
+    x = cell.particles.pos
+    c = x.mean(axis=0)
+    edge = float(np.mean(ct.r0)) if len(ct.r0) else 0.1
+    noise = np.random.default_rng(3).normal(scale=TRIAL_NOISE * edge, size=x.shape)
+    stretch = np.array([TRIAL_STRETCH, TRIAL_STRETCH ** -0.5, TRIAL_STRETCH ** -0.5])
+    cell.particles.pos = c + (x - c) * stretch + noise
+    if friction > 0:
+        s.thermostat.set_langevin(kT=0.0, gamma=friction, seed=1)
+    s.cell_drift_tolerance = 1e9  # the trial judges the outcome itself, without warnings
+    e0 = cell.get_energies()["total"]
+    outcome = "stable"
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            s.integrator.run(steps)
+        e1 = cell.get_energies()["total"]
+        if not (np.all(np.isfinite(cell.particles.pos)) and np.isfinite(e1)):
+            outcome = "unstable (non-finite)"
+        elif e1 > 10.0 * e0:
+            outcome = "unstable (energy grew tenfold)"
+    except SimulationInstability as err:
+        outcome = f"unstable ({err.cause})"
+    _TRIALS[key] = outcome
+    return outcome
 
 
 def check_settings(system, warn=False):
@@ -279,16 +344,16 @@ def check_settings(system, warn=False):
     for actor in system.actors:
         if hasattr(actor, "agrid") and hasattr(actor, "tau"):
             fluid = actor
-    gamma = 0.0
+    gamma = langevin = 0.0
     for state in system.thermostat.get_state():
         if state.get("type") == "LB":
             gamma = state["gamma"]
         elif state.get("type") == "LANGEVIN":
-            gamma = gamma or 0.0
+            langevin = state.get("gamma", 0.0) or 0.0
     report = SettingsReport()
     if fluid is not None:
         _fluid_settings(system, fluid, report)
-    _cell_settings(system, fluid, gamma, report)
+    _cell_settings(system, fluid, gamma, langevin, report)
     if warn:
         from . import rank
         if rank == 0:

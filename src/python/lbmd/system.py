@@ -10,6 +10,10 @@ from .particle_data import ParticleList
 from .validation import Param, parse, positive, non_negative
 
 
+#: runs shorter than this do not trigger the settings check of the first run
+SETTINGS_CHECK_MIN_STEPS = 10
+
+
 class CellSystem:
     """``system.cell_system``: neighbour search (linked cells + Verlet lists)."""
 
@@ -125,9 +129,13 @@ class Integrator:
         fluid = self._system._lb_fluid()
         if fluid is not None and len(fluid.open_boundaries):
             fluid.open_boundaries._before_run()
-        if not self._system.__dict__.get("_settings_checked"):
-            # once, at the first run: the scene's choices against their
-            # measured limits, warnings only (system.check_settings())
+        if not self._system.__dict__.get("_settings_checked") and v["steps"] >= SETTINGS_CHECK_MIN_STEPS:
+            # once, at the first run of SETTINGS_CHECK_MIN_STEPS steps or
+            # more: the scene's choices against their measured limits,
+            # warnings only (system.check_settings()). A shorter run (one
+            # step to compute the forces, as ESPResSo's tests do before they
+            # set the thermostat) cannot show an instability, and the scene
+            # may not be complete yet.
             self._system.__dict__["_settings_checked"] = True
             from .settings_check import check_settings
             try:
