@@ -5,7 +5,7 @@ published moduli (rbc374) and the coupling; prints the phases and writes CSV.
     pyoif maintainer/benchmarks/dense_cost.py [--diameter 20] [--length 60] [--haematocrits 0.1 0.4] [--steps 1000]
 
 The tube: a cylinder along x, periodic along it, a body force driving
-Poiseuille flow (centre speed about 0.5 mm/s), the cells packed by
+Poiseuille flow (centre speed 5 mm/s), the cells packed by
 oif.pack_cells. The cost per cell is (time of the run - time of the same
 tube without cells) / cells; the ratio dense / dilute is the issue's
 measure (target: no more than 1.5).
@@ -40,7 +40,7 @@ def scene(d, length, haematocrit, seed=1):
     if haematocrit > 0:
         cells = oif.pack_cells(s, ct, haematocrit=haematocrit, boundaries=[tube], seed=seed,
                                particle_mass=ct.suggest_LBgamma(visc=VISC, dens=DENS) * DT / 0.3)
-    u_centre = 0.5  # um/us = 0.5 mm/s
+    u_centre = 0.005  # um/us: 5 mm/s, a capillary number of the paper's order at the published moduli
     force = 4.0 * DENS * VISC * u_centre / (d / 2) ** 2
     lbf = lb.LBFluid(agrid=1.0, dens=DENS, visc=VISC, tau=DT, ext_force_density=[force, 0, 0])
     s.actors.add(lbf)
