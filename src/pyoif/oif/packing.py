@@ -42,6 +42,10 @@ from .seeding import (SeedingError, _count, _per_type, _ptype, _region, _shares,
                       rotation_to_angles)
 
 
+#: the cells' size at the start of the growth (the C++ packer's default)
+START_SCALE = 0.5
+
+
 class PackingError(SeedingError):
     """The cells could not be packed (too dense for the geometry, or too large)."""
 
@@ -198,31 +202,43 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         packer.add_boundary(s._core)
 
     # random start: centres in the fluid (by the boundaries' signed distance),
-    # larger cells first, types interleaved reproducibly by the seed
+    # at least half the thinnest cell's width apart (minimum image): two
+    # shrunken cells about one centre push each other symmetrically and
+    # would not separate; larger cells first, types interleaved
+    # reproducibly by the seed
     rng = np.random.default_rng(seed)
     order = sorted((i for i in range(k) for _ in range(counts[i])), key=lambda i: -vols[i])
     centres = np.empty((n, 3))
     quats = np.empty((n, 4))
     dist_fns = [_signed_distances(s) for s in shapes]
+    apart = 0.5 * START_SCALE * min(float(np.ptp(t.mesh._nodes, axis=0).min()) for t in types)
     filled = 0
     for _ in range(1000):
         cand = lo + rng.random((4 * n, 3)) * (hi - lo)
         ok = np.ones(len(cand), dtype=bool)
         for f in dist_fns:
             ok &= f(cand) > 0.5 * wall_clearance
-        cand = cand[ok][:n - filled]
-        centres[filled:filled + len(cand)] = cand
-        filled += len(cand)
+        for c in cand[ok]:
+            if filled:
+                d = centres[:filled] - c
+                d[:, periodic] -= box[periodic] * np.round(d[:, periodic] / box[periodic])
+                if np.einsum("ij,ij->i", d, d).min() < apart * apart:
+                    continue
+            centres[filled] = c
+            filled += 1
+            if filled == n:
+                break
         if filled == n:
             break
     else:
-        raise PackingError("pack_cells: found no fluid inside the region to place cells in; check 'region' "
-                           "and 'boundaries'")
+        raise PackingError("pack_cells: found no room in the fluid inside the region to start the cells in; "
+                           "check 'region' and 'boundaries'")
     for b, ti in enumerate(order):
         quats[b] = (_quaternion(rng) if axis is None else _axis_quaternion(axis, 2 * np.pi * rng.random()))
     packer.set_bodies(np.asarray(order, dtype=np.int32), centres, quats)
     settings = dict(box=box.tolist(), periodic=periodic.tolist(), clearance=clearance,
                     wall_clearance=wall_clearance, max_iterations=int(max_iterations), final_tolerance=0.05,
+                    start_scale=START_SCALE,
                     seed=int(seed or 0))
     if region is not None:
         settings["region"] = [lo.tolist(), hi.tolist()]
