@@ -37,6 +37,8 @@ Studies (each `run` row has `study` and the columns the chart needs):
 - contacts: cells in shear flow, pushed onto each other, at rising
   haematocrit and membrane-collision strength: the deepest node of one
   cell inside another and how many nodes are inside other cells.
+- hard_contacts: the same scene with the advised hard_contact, the cells
+  packed by oif.pack_cells, per mesh (rbc374, rbc642, rbc1002).
 
 Default run about 7 min, --quick about 20 s (26 Nov 2026, the 2-core
 development VM). `--charts-from DIR` redraws the charts from the CSVs.
@@ -478,6 +480,31 @@ def place_lattice(s, ct, layers, rng, tilt=0.04):
     return cells
 
 
+def contact_walls():
+    """The contacts scene's walls: normal to z, WALL from each face."""
+    lz = CONTACT_BOX[2]
+    return [shapes.Wall(normal=[0, 0, 1], dist=WALL), shapes.Wall(normal=[0, 0, -1], dist=-(lz - WALL))]
+
+
+def couette_fluid(s, walls, u_wall):
+    """The contacts scene's fluid: the walls moving at -+u_wall along x (as
+    lattice boundaries and as constraints of particle type 10), the fluid
+    started in the linear Couette profile; returns the LBFluid."""
+    lx, ly, lz = CONTACT_BOX
+    lbf = lb.LBFluid(agrid=1.0, dens=DENS, visc=VISC, tau=0.1)
+    s.actors.add(lbf)
+    s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[0], velocity=[-u_wall, 0, 0]))
+    s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[1], velocity=[u_wall, 0, 0]))
+    for w in walls:
+        s.constraints.add(shape=w, particle_type=10, penetrable=False)
+    for k in range(int(lz)):
+        z = k + 0.5
+        if WALL < z < lz - WALL:
+            u = u_wall * (2 * (z - WALL) / (lz - 2 * WALL) - 1)
+            lbf[:, :, k].velocity = np.tile([u, 0.0, 0.0], (int(lx), int(ly), 1))
+    return lbf
+
+
 def study_contacts(quick, layers_list=None, strengths=None, series=None, t_end=None):
     """Cells pressed together in shear flow: Couette flow (walls moving at
     +-u_wall, shear rate 0.011/us), rbc374 cells on a lattice of 1, 2, 4, 6
@@ -508,19 +535,8 @@ def study_contacts(quick, layers_list=None, strengths=None, series=None, t_end=N
                 s = lbmd.System(box_l=[lx, ly, lz])
                 s.time_step = 0.1
                 s.cell_system.skin = 0.4
-                lbf = lb.LBFluid(agrid=1.0, dens=DENS, visc=VISC, tau=0.1)
-                s.actors.add(lbf)
-                walls = [shapes.Wall(normal=[0, 0, 1], dist=WALL),
-                         shapes.Wall(normal=[0, 0, -1], dist=-(lz - WALL))]
-                s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[0], velocity=[-u_wall, 0, 0]))
-                s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[1], velocity=[u_wall, 0, 0]))
-                for w in walls:
-                    s.constraints.add(shape=w, particle_type=10, penetrable=False)
-                for k in range(int(lz)):
-                    z = k + 0.5
-                    if WALL < z < lz - WALL:
-                        u = u_wall * (2 * (z - WALL) / (lz - 2 * WALL) - 1)
-                        lbf[:, :, k].velocity = np.tile([u, 0.0, 0.0], (int(lx), int(ly), 1))
+                walls = contact_walls()
+                lbf = couette_fluid(s, walls, u_wall)
                 ct = cell_type(s, "rbc374")
                 cells = place_lattice(s, ct, layers, np.random.default_rng(layers))
                 n = ct.mesh.get_n_nodes()
@@ -583,7 +599,7 @@ def study_hard_contacts(quick, meshes=None, targets=None, push=2.0, t_end=None, 
             s.periodicity = [True, True, False]
             s.time_step = 0.1
             s.cell_system.skin = 0.4
-            walls = [shapes.Wall(normal=[0, 0, 1], dist=WALL), shapes.Wall(normal=[0, 0, -1], dist=-(lz - WALL))]
+            walls = contact_walls()
             ct = cell_type(s, mesh)
             t0 = cpu()
             try:
@@ -595,17 +611,7 @@ def study_hard_contacts(quick, meshes=None, targets=None, push=2.0, t_end=None, 
                 print(f"hard contacts {mesh} H {target}: not packed", flush=True)
                 continue
             pack_s = cpu() - t0
-            lbf = lb.LBFluid(agrid=1.0, dens=DENS, visc=VISC, tau=0.1)
-            s.actors.add(lbf)
-            s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[0], velocity=[-u_wall, 0, 0]))
-            s.lbboundaries.add(lbboundaries.LBBoundary(shape=walls[1], velocity=[u_wall, 0, 0]))
-            for w in walls:
-                s.constraints.add(shape=w, particle_type=10, penetrable=False)
-            for k in range(int(lz)):
-                z = k + 0.5
-                if WALL < z < lz - WALL:
-                    u = u_wall * (2 * (z - WALL) / (lz - 2 * WALL) - 1)
-                    lbf[:, :, k].velocity = np.tile([u, 0.0, 0.0], (int(lx), int(ly), 1))
+            lbf = couette_fluid(s, walls, u_wall)
             settings = oif.set_contacts(s, ct, particle_types=0, wall_types=10)
             n = ct.mesh.get_n_nodes()
             for c in cells:
