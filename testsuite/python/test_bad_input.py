@@ -640,7 +640,7 @@ def cell_types_density_one_gamma(sc):
     cells = [oif.OifCell(cell_type=fine, particle_type=0, origin=[6, 6, 6]),  # held: checked
              oif.OifCell(cell_type=coarse, particle_type=1, origin=[17, 6, 6])]
     s.thermostat.set_lb(LB_fluid=lbf, gamma=0.05)
-    s.integrator.run(0)
+    s.integrator.run(10)  # the check comes with the first run of 10 steps or more
     return cells
 
 
