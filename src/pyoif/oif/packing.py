@@ -38,8 +38,8 @@ import numpy as np
 from lbmd.validation import is_whole_number as _is_int
 
 from . import mesh_io
-from .seeding import (SeedingError, _count, _per_type, _ptype, _region, _shares, _signed_distances, _unit_axis, fluid_volume,
-                      rotation_to_angles)
+from .seeding import (SeedingError, _count, _length, _per_type, _ptype, _region, _shares, _signed_distances,
+                      _unit_axis, fluid_volume, rotation_to_angles)
 
 
 #: the cells' size at the start of the growth (the C++ packer's default)
@@ -100,16 +100,6 @@ def _shapes(boundaries):
     return out
 
 
-def _distance(name, x, default):
-    if x is None:
-        return default
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.floating, np.integer)):
-        raise TypeError(f"pack_cells: parameter '{name}' must be a number (or None for the default), got {x!r}")
-    if not np.isfinite(x) or x < 0:
-        raise ValueError(f"pack_cells: parameter '{name}' must be finite and >= 0, got {x!r}")
-    return float(x)
-
-
 def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None, boundaries=(), region=None,
                particle_types=None, particle_mass=1.0, seed=None, clearance=None, wall_clearance=None,
                rotation_axis=None, max_iterations=20000, create=True, exclusion_neighbours=True,
@@ -162,8 +152,10 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
                          f"would not see; pack every cell type in one call (list them in 'cell_types') before "
                          f"adding other cells or particles")
     from .contacts import packing_clearance
-    clearance = _distance("clearance", clearance, packing_clearance(types))
-    wall_clearance = _distance("wall_clearance", wall_clearance, 0.25)
+    clearance = _length("clearance", clearance, "pack_cells")
+    clearance = packing_clearance(types) if clearance is None else clearance
+    wall_clearance = _length("wall_clearance", wall_clearance, "pack_cells")
+    wall_clearance = 0.25 if wall_clearance is None else wall_clearance
     lo, hi = _region(system, region)
     box = np.asarray(system.box_l, dtype=float)
     periodic = np.asarray(system.periodicity, dtype=bool)

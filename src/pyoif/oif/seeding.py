@@ -179,17 +179,17 @@ def _ptype(name, x):
     return int(x)
 
 
-def _length(name, x):
-    """margin/gap: None (default) or a finite distance >= 0 (NaN would
-    silently switch the overlap checks off)."""
+def _length(name, x, owner="seed_cells"):
+    """margin/gap (pack_cells: clearances): None (default) or a finite
+    distance >= 0 (NaN would silently switch the overlap checks off)."""
     if x is None:
         return None
     if isinstance(x, np.ndarray) and x.ndim == 0:
         x = x.item()  # np.array(1.0) as 1.0
     if not isinstance(x, numbers.Real) or isinstance(x, (bool, np.bool_)):
-        raise TypeError(f"seed_cells: parameter '{name}' must be a number (or None for the default), got {x!r}")
+        raise TypeError(f"{owner}: parameter '{name}' must be a number (or None for the default), got {x!r}")
     if not np.isfinite(x) or x < 0:
-        raise ValueError(f"seed_cells: parameter '{name}' must be finite and >= 0, got {x!r}")
+        raise ValueError(f"{owner}: parameter '{name}' must be finite and >= 0, got {x!r}")
     return float(x)
 
 

@@ -286,16 +286,20 @@ def membrane_trial(cell_type, dt, mass, friction, steps=None):
     (kT 0): released at rest from a TRIAL_STRETCH x stretched shape with
     noise of TRIAL_NOISE of its mean edge. Unstable: a SimulationInstability,
     non-finite positions, or the elastic energy grown tenfold. Remembered
-    per (type, dt, mass, friction)."""
+    per (mesh, moduli, dt, mass, friction)."""
     import os
     import tempfile
     import oif
     from . import System, SimulationInstability
     steps = steps or TRIAL_STEPS
-    key = (id(cell_type), float(dt), float(mass), float(friction), steps)
+    # the type by its content, not its id (an id is reused after the type
+    # is gone): the relaxed mesh and the moduli
+    nodes = np.asarray(cell_type.mesh._nodes, dtype=float)
+    moduli = tuple(float(getattr(cell_type, k)) for k in ("ks", "kslin", "kb", "kal", "kag", "kv", "kvisc"))
+    key = (nodes.tobytes(), np.asarray(cell_type.mesh._topo.triangles).tobytes(), moduli,
+           bool(cell_type.normal), float(dt), float(mass), float(friction), steps)
     if key in _TRIALS:
         return _TRIALS[key]
-    nodes = np.asarray(cell_type.mesh._nodes, dtype=float)
     nodes = nodes - nodes.mean(axis=0)
     side = 3.0 * float(np.ptp(nodes, axis=0).max()) + 10.0
     s = System(box_l=[side] * 3)
