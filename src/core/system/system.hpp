@@ -173,6 +173,9 @@ public:
   void update_contact_guards();
   /** A pair model's error (hard_contact's "contact_overrun") with the pair's
    *  particles, cells (or the wall) and the time. */
+  /** Rethrows a contact_overrun of the pair loop with the pair that caused
+   *  it (found again; returns when none is found). */
+  void name_contact_overrun(const SimulationInstability& error) const;
   [[noreturn]] void rethrow_pair_error(const SimulationInstability& e, int id_i, int id_j,
                                        const PairContext& c, const std::string& wall) const;
   /** Called by integrate every 16 steps, where the particles are as at the

@@ -74,6 +74,20 @@ struct HardContact {
     return potential(p, std::max(c.dist - p.offset, 1e-6 * p.cutoff));
   }
 
+  /** The error of a pair closed below the guard gap, out of line: the pair
+   *  loop's fast path stays small. */
+  [[noreturn]] [[gnu::cold]] [[gnu::noinline]] static void overrun(const Params& p, double h) {
+    throw SimulationInstability(
+        "contact_overrun",
+        "hard_contact overrun: a gap closed to " + format_number(h) + " (offset " +
+            format_number(p.offset) + ", cutoff " + format_number(p.cutoff) + "), below the " +
+            format_number(p.guard_gap) +
+            " at which the contact's stiffness outruns the time step. The cells are pushed "
+            "harder than the contact can hold at this time step: lower the time step or the "
+            "driving force, or raise a")
+        .with_value(h);
+  }
+
   /** Force on i; throws "contact_overrun" below the guard gap (the caller
    *  adds the particles). */
   static Vec3 force(const Params& p, const PairContext& c) {
@@ -81,15 +95,7 @@ struct HardContact {
       return Vec3::Zero();
     const double h = c.dist - p.offset;
     if (h <= p.guard_gap || h <= 0.0)
-      throw SimulationInstability(
-          "contact_overrun",
-          "hard_contact overrun: a gap closed to " + format_number(h) + " (offset " +
-              format_number(p.offset) + ", cutoff " + format_number(p.cutoff) + "), below the " +
-              format_number(p.guard_gap) +
-              " at which the contact's stiffness outruns the time step. The cells are pushed "
-              "harder than the contact can hold at this time step: lower the time step or the "
-              "driving force, or raise a")
-          .with_value(h);
+      overrun(p, h);
     const double magnitude = p.a * (std::pow(p.cutoff / h, p.n) - 1.0);
     return (magnitude / c.dist) * c.d;
   }
