@@ -9,7 +9,8 @@ namespace pyoif {
 
 void System::restore_run_state(const std::vector<Vec3>& folded_pos, const std::vector<Vec3i>& image,
                                const std::vector<Vec3>& force, const std::vector<Vec3>& normal,
-                               const std::vector<Vec3>& rebuild_reference, int lb_substep) {
+                               const std::vector<Vec3>& rebuild_reference, int lb_substep,
+                               bool forces_valid) {
   synchronize();
   auto& p = particles;
   const std::size_t n = p.n_local();
@@ -42,7 +43,13 @@ void System::restore_run_state(const std::vector<Vec3>& folded_pos, const std::v
   p.force = force;
   p.normal = normal;
   m_lb_substep = m_lb ? lb_substep : 0;
-  mark_forces_valid();
+  // valid only where they were at the save: a checkpoint written before
+  // any force calculation (a stop signal before the first step) holds no
+  // forces, and the resumed run must compute them as the first run would
+  if (forces_valid)
+    mark_forces_valid();
+  else
+    invalidate_forces();
 }
 
 } // namespace pyoif

@@ -212,6 +212,9 @@ public:
    *  they change; a caller that writes `particles` (positions, velocities,
    *  external forces, types) directly must call it. */
   void invalidate_forces() { m_forces_valid = false; }
+  /** The stored forces are those of the current state (a run or a force
+   *  calculation made them, nothing changed since). */
+  bool forces_valid() const { return m_forces_valid; }
   /** Number of MD steps per lattice update (tau / time_step). */
   int lb_steps_per_update() const;
 
@@ -228,7 +231,8 @@ public:
    *  on as the saved run would have, bit for bit. */
   void restore_run_state(const std::vector<Vec3>& folded_pos, const std::vector<Vec3i>& image,
                          const std::vector<Vec3>& force, const std::vector<Vec3>& normal,
-                         const std::vector<Vec3>& rebuild_reference, int lb_substep);
+                         const std::vector<Vec3>& rebuild_reference, int lb_substep,
+                         bool forces_valid = true);
 
   // --- particles over the ranks of a decomposed lattice (system_parallel.cpp)
   // Every rank stores every particle (same local indices everywhere), but

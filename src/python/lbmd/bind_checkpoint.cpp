@@ -85,14 +85,19 @@ void bind_checkpoint(py::module_& m) {
       .def("set_step_count", [](System& s, std::uint64_t n) { s.step_count = n; })
       .def("bond_reference_values",
            [](const System& s, int bond_id) { return column(s.bonded.at(bond_id).bonds.per_bond); })
-      .def("restore_run_state",
-           [](System& s, const RealArray& folded_pos, const IntArray& image, const RealArray& force,
-              const RealArray& normal, const RealArray& reference, int lb_substep) {
-             s.restore_run_state(from_rows<Vec3>(folded_pos, "folded_pos"),
-                                 from_rows<Vec3i>(image, "image"), from_rows<Vec3>(force, "f"),
-                                 from_rows<Vec3>(normal, "normal"),
-                                 from_rows<Vec3>(reference, "rebuild_reference"), lb_substep);
-           });
+      .def(
+          "restore_run_state",
+          [](System& s, const RealArray& folded_pos, const IntArray& image, const RealArray& force,
+             const RealArray& normal, const RealArray& reference, int lb_substep,
+             bool forces_valid) {
+            s.restore_run_state(
+                from_rows<Vec3>(folded_pos, "folded_pos"), from_rows<Vec3i>(image, "image"),
+                from_rows<Vec3>(force, "f"), from_rows<Vec3>(normal, "normal"),
+                from_rows<Vec3>(reference, "rebuild_reference"), lb_substep, forces_valid);
+          },
+          py::arg("folded_pos"), py::arg("image"), py::arg("force"), py::arg("normal"),
+          py::arg("reference"), py::arg("lb_substep"), py::arg("forces_valid") = true)
+      .def_property_readonly("forces_valid", &System::forces_valid);
 
   auto fluid = py::reinterpret_borrow<py::class_<lb::LBFluid, std::shared_ptr<lb::LBFluid>>>(
       m.attr("LBFluid"));

@@ -113,7 +113,7 @@ def system_state(system):
     state["_checkpoint"] = {
         "prefix": prefix, "box_l": list(core.box_l), "periodicity": list(core.periodicity),
         "time_step": core.time_step, "time": core.time, "step_count": int(core.step_count),
-        "lb_substep": int(core.lb_substep), "skin": core.skin, "cell_checks": core.cell_checks,
+        "lb_substep": int(core.lb_substep), "forces_valid": bool(core.forces_valid), "skin": core.skin, "cell_checks": core.cell_checks,
         "cell_drift_tolerance": core.cell_drift_tolerance,
         "langevin": (bool(lang.active), lang.kT, lang.gamma, int(lang.seed)),
         "nonbonded": nonbonded, "fluid": fluid_state}
@@ -197,7 +197,8 @@ def restore_system(system, state):
     core.time = saved["time"]
     core.set_step_count(saved["step_count"])
     core.restore_run_state(part["folded_pos"], part["image"].astype(np.int32), part["f"], part["normal"],
-                           part["rebuild_reference"].reshape(-1, 3), saved["lb_substep"])
+                           part["rebuild_reference"].reshape(-1, 3), saved["lb_substep"],
+                           saved.get("forces_valid", True))  # checkpoints before 29 Nov 2026: valid
 
 
 # --- save and load ------------------------------------------------------------
