@@ -9,6 +9,7 @@
 
 #include "interactions/nonbonded/membrane_collision.hpp"
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <functional>
@@ -243,7 +244,8 @@ TEST(OifMembrane, ModuliMatchModelEquations) {
     expected.push_back({"global_area", [&](System& s) { add_global(s, m, m.nodes, k, 0.0); }, f});
   }
   // membrane viscosity (ESPResSo's variant B): per edge AB, on A
-  // kvisc ((v_B - v_A) . e) e, e = AB/|AB|, and the opposite on B
+  // kvisc ((v_B - v_A) . e) e, e = AB/|AB|, and the opposite on B (explicit
+  // at this dt kvisc / m, 0.04; the implicit solve: the test below)
   std::vector<Vec3> v(n);
   for (auto& vi : v)
     vi = Vec3(u(rng), u(rng), u(rng));
@@ -291,6 +293,122 @@ TEST(OifMembrane, ModuliMatchModelEquations) {
     EXPECT_LT(err, 1e-12 * fmax) << e.name;
     std::cout << "[ figure ] " << e.name
               << " vs model equation: max error / max|F| = " << err / fmax << "\n";
+  }
+}
+
+// The membrane viscosity (viscosity.hpp): (1) at a tiny time step it is the
+// explicit dashpot force -C v (relative 1e-5); (2) beyond the explicit limit
+// it is backward Euler's (a dense solve); (3) at dt kvisc / m =
+// 1000, six thousand times the explicit limit of about 1/6, a stretched cell
+// with random velocities runs 200 steps without blowing up, its kinetic energy
+// falls, its momentum is kept to 1e-12 relative and the edges' relative
+// velocities are damped to below 1 % of their start.
+TEST(OifMembrane, ViscosityImplicitStableAndExplicitInTheLimit) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Mesh& m = mesh();
+  const std::size_t n = m.nodes.size();
+  std::vector<Vec3> x(n), v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = Vec3(1.2, 0.9, 1.0).cwiseProduct(m.nodes[i]) + Vec3(25, 25, 25);
+    v[i] = Vec3(u(rng), u(rng), u(rng));
+  }
+  auto edge_speed = [&](const System& s) { // rms relative velocity along the edges
+    double sum = 0.0;
+    for (const auto& e : m.edges) {
+      const std::size_t a = s.particles.index(e[0]), b = s.particles.index(e[1]);
+      const Vec3 unit = (s.particles.pos[b] - s.particles.pos[a]).normalized();
+      sum += std::pow((s.particles.vel[b] - s.particles.vel[a]).dot(unit), 2);
+    }
+    return std::sqrt(sum / m.edges.size());
+  };
+  { // (1) the explicit limit
+    const double kvisc = 0.7;
+    auto s = oif_test::make_system();
+    s->set_time_step(1e-8);
+    oif_test::add_cell_particles(*s, x, 0, 0, &v);
+    add_local(*s, m, x, OifLocalForces{0, 0, 0, 0, kvisc});
+    const auto f = oif_test::forces_of(*s, n);
+    std::vector<Vec3> explicit_force(n, Vec3::Zero());
+    for (const auto& e : m.edges) {
+      const Vec3 unit = (x[e[1]] - x[e[0]]).normalized();
+      const Vec3 fa = kvisc * (v[e[1]] - v[e[0]]).dot(unit) * unit;
+      explicit_force[e[0]] += fa;
+      explicit_force[e[1]] -= fa;
+    }
+    double fmax = 0.0, err = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      fmax = std::max(fmax, explicit_force[i].norm());
+      err = std::max(err, (f[i] - explicit_force[i]).norm());
+    }
+    std::cout << "[ figure ] viscosity at dt 1e-8 vs explicit: max error / max|F| = " << err / fmax
+              << "\n";
+    EXPECT_LT(err, 1e-5 * fmax);
+  }
+  { // (2) at dt kvisc / m = 10, a cell alone: the backward-Euler force
+    // -C v_new, (M/dt + C) v_new = (M/dt) v (no elastic load), solved densely;
+    // the solve stops at a relative residual of 1e-6; times the system's
+    // condition number (about 1 + 6 dt kvisc / m = 61): relative 1e-4
+    const double kvisc = 100.0, dt = 0.1, mass = 1.0;
+    auto s = oif_test::make_system();
+    s->set_time_step(dt);
+    oif_test::add_cell_particles(*s, x, 0, 0, &v);
+    add_local(*s, m, x, OifLocalForces{0, 0, 0, 0, kvisc});
+    const auto f = oif_test::forces_of(*s, n);
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+    for (const auto& e : m.edges) {
+      const Vec3 unit = (x[e[1]] - x[e[0]]).normalized();
+      const Eigen::Matrix3d block = kvisc * unit * unit.transpose();
+      const int a = 3 * e[0], b = 3 * e[1];
+      C.block<3, 3>(a, a) += block;
+      C.block<3, 3>(b, b) += block;
+      C.block<3, 3>(a, b) -= block;
+      C.block<3, 3>(b, a) -= block;
+    }
+    Eigen::VectorXd v_flat(3 * n);
+    for (std::size_t i = 0; i < n; ++i)
+      v_flat.segment<3>(3 * i) = v[i];
+    const Eigen::MatrixXd A = mass / dt * Eigen::MatrixXd::Identity(3 * n, 3 * n) + C;
+    const Eigen::VectorXd expected = -C * A.ldlt().solve(mass / dt * v_flat);
+    double fmax = 0.0, err = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      fmax = std::max(fmax, expected.segment<3>(3 * i).norm());
+      err = std::max(err, (f[i] - expected.segment<3>(3 * i)).norm());
+    }
+    std::cout << "[ figure ] implicit viscosity at dt kvisc / m 10 vs dense solve: max error / "
+                 "max|F| = "
+              << err / fmax << "\n";
+    EXPECT_LT(err, 1e-4 * fmax);
+  }
+  { // (3) far beyond the explicit limit
+    auto s = oif_test::make_system();
+    s->set_time_step(0.1);
+    oif_test::add_cell_particles(*s, x, 0, 0, &v);
+    std::vector<Vec3> relaxed(n);
+    for (std::size_t i = 0; i < n; ++i)
+      relaxed[i] = m.nodes[i] + Vec3(25, 25, 25);
+    add_local(*s, m, relaxed, OifLocalForces{1.0, 0, 0, 0, 1e4}); // dt kvisc / m = 1000
+    auto momentum = [&] {
+      Vec3 p = Vec3::Zero();
+      for (std::size_t i = 0; i < n; ++i)
+        p += s->particles.vel[i];
+      return p;
+    };
+    double kinetic0 = 0.0;
+    for (const auto& vi : v)
+      kinetic0 += 0.5 * vi.squaredNorm();
+    const Vec3 p0 = momentum();
+    const double speed0 = edge_speed(*s);
+    ASSERT_NO_THROW(s->integrate(200));
+    double kinetic = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      kinetic += 0.5 * s->particles.vel[i].squaredNorm();
+    std::cout << "[ figure ] dt kvisc / m 1000, 200 steps: kinetic energy " << kinetic0 << " -> "
+              << kinetic << ", edge speed " << speed0 << " -> " << edge_speed(*s)
+              << ", |dp| = " << (momentum() - p0).norm() << "\n";
+    EXPECT_LT(kinetic, kinetic0);
+    EXPECT_LT((momentum() - p0).norm(), 1e-12 * std::sqrt(2.0 * kinetic0 * n));
+    EXPECT_LT(edge_speed(*s), 0.01 * speed0);
   }
 }
 

@@ -84,6 +84,7 @@ void System::prepare_step(int moved) {
 void System::add_membrane_forces(Energies* e) {
   membranes.shape_checks = m_checks_due && !e;
   membranes.step = static_cast<long long>(step_count);
+  membranes.time_step = m_time_step; // the viscosity's implicit solve over one step
   membranes.add_forces(bonded, m_bonds_version, particles, box, time, owned_mask(),
                        m_spread.version);
   if (!e)

@@ -121,8 +121,9 @@ py::tuple forces(System& s, int bond_id, const std::string& term, int mol_id) {
                      term + "'");
   std::vector<Vec3> f(s.particles.n_local(), Vec3::Zero());
   std::vector<std::pair<int, int>> nodes; // of the selected cells, in id order
+  // the viscosity as the time step applies it (implicit over one step)
   membrane::analyse(s.bonded, selection(bond_id, mol_id, which), s.particles, s.box, s.time,
-                    f.data(), &nodes);
+                    f.data(), &nodes, s.time_step());
   IdArray out_ids(static_cast<py::ssize_t>(nodes.size()));
   RealArray out({static_cast<py::ssize_t>(nodes.size()), py::ssize_t{3}});
   auto w = out.mutable_unchecked<2>();
@@ -211,10 +212,15 @@ void bind_oif(py::module_& m) {
             d["lane_batches"] = c.lane_batches;
             d["padded_lanes"] = c.padded_lanes;
             d["plain_cells"] = c.plain_cells;
+            d["viscous_solves"] = c.viscous_solves;
+            d["viscous_iterations"] = c.viscous_iterations;
+            d["viscous_max_iterations"] = c.viscous_max_iterations;
             return d;
           },
           "How often the membrane pass compiled its tables and evaluated cells in vector "
-          "lanes (batches of four) or alone, since the System was made.")
+          "lanes (batches of four) or alone, and how many implicit membrane-viscosity "
+          "solves it made with how many conjugate-gradient iterations (summed, and the "
+          "most of one), since the System was made.")
       .def(
           "membrane_invalidate", [](System& s) { s.membranes.invalidate(); },
           "Drop the compiled membrane tables (the next force calculation compiles anew).");

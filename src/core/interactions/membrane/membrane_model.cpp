@@ -187,6 +187,14 @@ void build_cell(const std::vector<BondedEntry>& bonded, const CellBonds& bonds, 
   t.neo = any(t.stretching, [](const StretchingParams& x) { return x.ks; });
   t.visc = any(t.viscosity, [](const ViscosityParams& x) { return x.kvisc; });
   t.bend = any(t.bending, [](const BendingParams& x) { return x.kb; });
+  if (t.visc) {
+    std::vector<double> node_kvisc(t.n_nodes, 0.0);
+    for (std::size_t k = 0; k < t.edge_b.size(); ++k) {
+      node_kvisc[t.edge_b[k]] += t.viscosity[k].kvisc;
+      node_kvisc[t.edge_c[k]] += t.viscosity[k].kvisc;
+    }
+    t.kvisc_node_max = *std::max_element(node_kvisc.begin(), node_kvisc.end());
+  }
   t.edges = t.neo || t.visc || t.bend ||
             any(t.stretching, [](const StretchingParams& x) { return x.kslin; });
   if (!t.edges) {
@@ -366,18 +374,37 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
   m_model.shape_checks = shape_checks;
   m_model.drift_tolerance = drift_tolerance;
   m_model.step = step;
+  m_model.time_step = time_step;
   if (!m_model.empty())
     m_model.evaluate(p, box, time, p.force.data(), p.normal.data(), nullptr, counts);
+  counts.viscous_solves += std::exchange(m_model.viscous_solves, 0);
+  counts.viscous_iterations += std::exchange(m_model.viscous_iterations, 0);
+  counts.viscous_max_iterations =
+      std::max(counts.viscous_max_iterations, std::exchange(m_model.viscous_max_iterations, 0));
 }
 
 std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,
                                 const ParticleStore& p, const BoxGeometry& box, double time,
-                                Vec3* force, std::vector<std::pair<int, int>>* nodes) {
+                                Vec3* force, std::vector<std::pair<int, int>>* nodes,
+                                double time_step) {
   Model model;
-  model.compile(bonded, select, p);
+  model.time_step = time_step;
   PassCounts counts;
   std::vector<CellReport> reports;
-  model.evaluate(p, box, time, force, nullptr, &reports, counts);
+  if (select.term == viscosity && time_step > 0.0) {
+    // the time step's viscous force works against all the cells' membrane
+    // forces (viscosity.hpp): the selected cells compiled whole, only their
+    // viscous forces kept
+    Selection whole = select;
+    whole.term = -1;
+    whole.bond_id = -1;
+    model.compile(bonded, whole, p);
+    model.viscous_force = force;
+    model.evaluate(p, box, time, nullptr, nullptr, &reports, counts);
+  } else {
+    model.compile(bonded, select, p);
+    model.evaluate(p, box, time, force, nullptr, &reports, counts);
+  }
   if (nodes)
     *nodes = model.nodes_by_id(p);
   return reports;

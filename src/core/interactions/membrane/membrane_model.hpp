@@ -84,10 +84,13 @@ struct Selection {
 
 /** Counters of the evaluations, so that tests see which path ran. */
 struct PassCounts {
-  std::uint64_t compiles = 0;     ///< tables built from the bonds
-  std::uint64_t lane_batches = 0; ///< groups of four cells evaluated in vector lanes
-  std::uint64_t padded_lanes = 0; ///< lanes of those groups that repeat a cell
-  std::uint64_t plain_cells = 0;  ///< cells evaluated one at a time
+  std::uint64_t compiles = 0;           ///< tables built from the bonds
+  std::uint64_t lane_batches = 0;       ///< groups of four cells evaluated in vector lanes
+  std::uint64_t padded_lanes = 0;       ///< lanes of those groups that repeat a cell
+  std::uint64_t plain_cells = 0;        ///< cells evaluated one at a time
+  std::uint64_t viscous_solves = 0;     ///< cells whose viscosity was solved (viscosity.hpp)
+  std::uint64_t viscous_iterations = 0; ///< their conjugate-gradient iterations, summed
+  int viscous_max_iterations = 0;       ///< the most of one solve
 };
 
 /** The shape tables of one kind of cell (see the file comment). */
@@ -109,6 +112,9 @@ struct Topology {
   std::vector<std::uint8_t> has_normal; ///< per node: in a normals triangle
   // the terms that occur: the pass's instantiation
   bool neo = false, visc = false, bend = false;
+  /// the most, over the nodes, of the summed kvisc of a node's edges: the
+  /// explicit dashpots' fastest rate is about this / m (viscosity.hpp)
+  double kvisc_node_max = 0.0;
   bool edges = false;          ///< an edge term is on (the edge pass runs)
   bool has_local_area = false; ///< local area on some triangle
   bool closed = false;         ///< a closed surface: area, volume, orientation
@@ -151,6 +157,18 @@ public:
   double drift_tolerance = 0.05; ///< relative; 0: no notes
   long long step = -1;           ///< the MD step evaluated (for the notes)
   std::vector<DriftNote> drift_notes;
+  /** The time step of the membrane viscosity's implicit solve (viscosity.hpp);
+   *  0: the explicit force at the current velocities (analysis). */
+  double time_step = 0.0;
+  /** dt kvisc_node_max / m up to which the viscosity stays explicit
+   *  (viscosity.hpp). */
+  static constexpr double explicit_viscosity_limit = 1.5;
+  /** Where not null, the viscous forces alone are also added here, per
+   *  local index (analysis of the viscosity term). */
+  Vec3* viscous_force = nullptr;
+  /** The viscous solves since the counters were last taken. */
+  std::uint64_t viscous_solves = 0, viscous_iterations = 0;
+  int viscous_max_iterations = 0;
 
   /** Builds the tables from the membrane bonds of `bonded` chosen by `select`.
    *  Throws SimulationInstability for a bond of a missing particle,
@@ -173,6 +191,15 @@ private:
                       double time, Vec3* force, Vec3* normal, std::vector<CellReport>* reports);
   /** The nodes of `cell` (positions relative to its first node, and with v
    *  the velocities) into lane j of the node arrays x and v. */
+  /** The viscous forces of `cell` (lane j of the gathered x and v) added
+   *  to lane j of f. */
+  template <class Node>
+  void add_viscous_forces(const Cell& cell, int j, const ParticleStore& p, const Node* x,
+                          const Node* v, Node* f, bool implicit);
+  /** The cell's viscosity needs the implicit solve: time_step > 0 and
+   *  dt kvisc_node_max / m (its lightest node) beyond
+   *  explicit_viscosity_limit. */
+  bool needs_implicit_viscosity(const Cell& cell, const ParticleStore& p) const;
   template <class Node>
   void gather(const Cell& cell, int j, const ParticleStore& p, const BoxGeometry& box, Node* x,
               Node* v) const;
@@ -201,6 +228,10 @@ private:
   };
   Workspace<double> m_plain;
   Workspace<Lanes> m_lanes;
+  ViscousSolver m_viscous;
+  struct ViscousScratch {
+    std::vector<double> x, v, f, mass, load;
+  } m_viscous_scratch;
   template <class T> Workspace<T>& workspace();
 };
 
@@ -216,7 +247,8 @@ public:
    *  the steps of a run) and the drift tolerance (0: none). */
   bool shape_checks = false;
   double drift_tolerance = 0.05;
-  long long step = -1; ///< the MD step evaluated (for the notes)
+  long long step = -1;    ///< the MD step evaluated (for the notes)
+  double time_step = 0.0; ///< of the viscous solve (Model::time_step)
   /** The drift notes since the last call. */
   std::vector<DriftNote> take_drift_notes() { return std::exchange(m_model.drift_notes, {}); }
 
@@ -246,9 +278,11 @@ private:
  *  cell, one term), compiled anew and evaluated by the same driver as the
  *  time step: one report per cell; with force (may be null) the selected
  *  forces added to force[local index]; with nodes (may be null) the
- *  selected cells' nodes (Model::nodes_by_id). */
+ *  selected cells' nodes (Model::nodes_by_id). time_step: the viscosity as
+ *  the time step applies it (implicit, viscosity.hpp); 0: explicit. */
 std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,
                                 const ParticleStore& p, const BoxGeometry& box, double time,
-                                Vec3* force, std::vector<std::pair<int, int>>* nodes = nullptr);
+                                Vec3* force, std::vector<std::pair<int, int>>* nodes = nullptr,
+                                double time_step = 0.0);
 
 } // namespace pyoif::membrane

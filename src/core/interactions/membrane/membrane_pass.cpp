@@ -44,13 +44,15 @@ constexpr int kEdgeBlock = 16;
 constexpr double inverted_cos2 = 0.75;
 constexpr double volume_collapsed = 0.25, volume_exploded = 4.0;
 
-/** Stretching, viscosity and bending of every edge of the topology, added
- *  to the node forces f; x, v: the nodes' positions and velocities. With
+/** Stretching, explicit viscosity and bending of every edge of the
+ *  topology, added to the node forces f; x, v: the nodes' positions and
+ *  velocities; explicit_visc: per lane 1 where the cell's viscosity is
+ *  explicit (in this pass), 0 where it is implicit (viscosity.hpp). With
  *  energies (non-null) the edges' stretching and bending energies are summed
  *  into them. Returns the lanes with a zero-length edge or (bending) a
  *  degenerate wing triangle. */
 template <class T, bool neo, bool visc, bool bend, class Node>
-Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
+Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, T explicit_visc, Node* f,
                   T* stretching_energy_sum, T* bending_energy_sum, bool shape_checks) {
   struct Factors {
     T e[3], n1[3], n2[3], coefficient;
@@ -92,7 +94,7 @@ Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
         T c = stretching_coefficient<neo>(stretch, l, lambda, r.inv[0], r.inv[1],
                                           stretching_energy_sum);
         if constexpr (visc)
-          c += viscosity_coefficient(t.viscosity[k], e, dv, r.inv[0]);
+          c += explicit_visc * viscosity_coefficient(t.viscosity[k], e, dv, r.inv[0]);
         return c;
       };
       if constexpr (bend) {
@@ -147,20 +149,20 @@ Mask<T> edge_pass(const Topology& t, const Node* x, const Node* v, Node* f,
 
 /** edge_pass for the terms the topology has (one instantiation each). */
 template <class T, class Node>
-Mask<T> edge_pass_for(const Topology& t, const Node* x, const Node* v, Node* f, T* stretching_sum,
-                      T* bending_sum, bool shape_checks) {
-  auto with = [&](auto neo, auto visc, auto bend) {
-    return edge_pass<T, decltype(neo)::value, decltype(visc)::value, decltype(bend)::value>(
-        t, x, v, f, stretching_sum, bending_sum, shape_checks);
+Mask<T> edge_pass_for(const Topology& t, const Node* x, const Node* v, T explicit_visc, bool visc,
+                      Node* f, T* stretching_sum, T* bending_sum, bool shape_checks) {
+  auto with = [&](auto neo, auto visc_, auto bend) {
+    return edge_pass<T, decltype(neo)::value, decltype(visc_)::value, decltype(bend)::value>(
+        t, x, v, explicit_visc, f, stretching_sum, bending_sum, shape_checks);
   };
   using yes = std::true_type;
   using no = std::false_type;
-  auto by_bend = [&](auto neo, auto visc) {
-    return t.bend ? with(neo, visc, yes{}) : with(neo, visc, no{});
+  auto by_bend = [&](auto neo, auto visc_) {
+    return t.bend ? with(neo, visc_, yes{}) : with(neo, visc_, no{});
   };
   if (t.neo)
-    return t.visc ? by_bend(yes{}, yes{}) : by_bend(yes{}, no{});
-  return t.visc ? by_bend(no{}, yes{}) : by_bend(no{}, no{});
+    return visc ? by_bend(yes{}, yes{}) : by_bend(yes{}, no{});
+  return visc ? by_bend(no{}, yes{}) : by_bend(no{}, no{});
 }
 
 } // namespace
@@ -296,18 +298,38 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
         f[t.tri_v2[q]].c[d] += cq * m.c;
       }
     }
-  // edge pass: stretching, viscosity, bending
+  // the viscosity of each cell: explicit in the edge pass while the
+  // dashpots are safely stable so (viscosity.hpp), else implicit below
+  T explicit_visc = splat<T>(1.0);
+  bool implicit_visc[kLanes] = {};
+  bool any_explicit = false;
+  if (t.visc)
+    for (int j = 0; j < kLanes; ++j) {
+      implicit_visc[j] = needs_implicit_viscosity(m_cells[group.cell[j]], p);
+      set_lane(explicit_visc, j, implicit_visc[j] ? 0.0 : 1.0);
+      any_explicit |= !implicit_visc[j];
+    }
+  // edge pass: stretching, explicit viscosity, bending
   T stretching_energy_sum{}, bending_energy_sum{};
   if (t.edges)
-    bad |= edge_pass_for<T>(t, x, v, f, with_reports ? &stretching_energy_sum : nullptr,
+    bad |= edge_pass_for<T>(t, x, v, explicit_visc, t.visc && any_explicit, f,
+                            with_reports ? &stretching_energy_sum : nullptr,
                             with_reports ? &bending_energy_sum : nullptr, shape_checks);
-  // per node: the volume force along its sum of N, all finite
-  for (int k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) {
-      if (volume_forces)
+  // per node: the volume force along its sum of N
+  if (volume_forces)
+    for (int k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d)
         f[k].c[d] += vol_factor * vsum[k].c[d];
+  // viscosity: implicit against the elastic forces above, cell by cell
+  // (viscosity.hpp), in double whatever T (a cell's result does not depend
+  // on the lanes it shares)
+  if (t.visc)
+    for (int j = 0; j < group.n_cells; ++j)
+      if (implicit_visc[j] || viscous_force)
+        add_viscous_forces(m_cells[group.cell[j]], j, p, x, v, f, implicit_visc[j]);
+  for (int k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d)
       bad |= not_finite(f[k].c[d]);
-    }
   for (int j = 0; j < group.n_cells; ++j)
     if (lane_set<T>(bad, j))
       report_failure<T>(group, j, p, time, lane(cell_volume, j));
@@ -346,6 +368,56 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
               Vec3(lane(nk.x, j), lane(nk.y, j), lane(nk.z, j));
       }
     }
+}
+
+bool Model::needs_implicit_viscosity(const Cell& cell, const ParticleStore& p) const {
+  if (!(time_step > 0.0))
+    return false;
+  const Topology& t = m_topologies[cell.topology];
+  const int* const index = m_node_index.data() + cell.node_begin;
+  double lightest = p.mass[index[0]];
+  for (int k = 1; k < t.n_nodes; ++k)
+    lightest = std::min(lightest, p.mass[index[k]]);
+  return time_step * t.kvisc_node_max / lightest > explicit_viscosity_limit;
+}
+
+template <class Node>
+void Model::add_viscous_forces(const Cell& cell, int j, const ParticleStore& p, const Node* x,
+                               const Node* v, Node* f, bool implicit) {
+  const Topology& t = m_topologies[cell.topology];
+  const int n = t.n_nodes;
+  const int* const index = m_node_index.data() + cell.node_begin;
+  ViscousScratch& s = m_viscous_scratch;
+  for (auto* a : {&s.x, &s.v, &s.f})
+    a->assign(3 * n, 0.0);
+  s.mass.resize(n);
+  s.load.resize(3 * n);
+  for (int k = 0; k < n; ++k) {
+    const int i = index[k];
+    for (int d = 0; d < 3; ++d) {
+      s.x[3 * k + d] = lane(x[k].c[d], j);
+      s.v[3 * k + d] = lane(v[k].c[d], j);
+      // the forces the dashpots work against in this step: the membrane's
+      // elastic ones (so far in f) and the external ones
+      s.load[3 * k + d] = lane(f[k].c[d], j) + p.ext_force[i][d];
+    }
+    s.mass[k] = p.mass[i];
+  }
+  // explicit (the edge pass added it to f already): only reported
+  m_viscous.add_forces(n, static_cast<int>(t.edge_b.size()), t.edge_b.data(), t.edge_c.data(),
+                       t.viscosity.data(), s.x.data(), s.v.data(), s.mass.data(), s.load.data(),
+                       implicit ? time_step : 0.0, s.f.data());
+  if (viscous_force)
+    for (int k = 0; k < n; ++k)
+      viscous_force[index[k]] += Vec3(s.f[3 * k], s.f[3 * k + 1], s.f[3 * k + 2]);
+  if (!implicit)
+    return;
+  ++viscous_solves;
+  viscous_iterations += static_cast<std::uint64_t>(m_viscous.last_iterations);
+  viscous_max_iterations = std::max(viscous_max_iterations, m_viscous.last_iterations);
+  for (int k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d)
+      set_lane(f[k].c[d], j, lane(f[k].c[d], j) + s.f[3 * k + d]);
 }
 
 template <class Node>
