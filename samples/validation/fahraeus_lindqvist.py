@@ -5,7 +5,8 @@ Pries et al.
 
     pyoif samples/validation/fahraeus_lindqvist.py [--diameters 10] [--hd 0.25] [--ht H_T]
         [--ca 10] [--strain 150] [--transient 50] [--length-ratio 4] [--gamma-factor 1]
-        [--node-mass-ratio 0.3] [--kvisc 1] [--seed 1] [--output DIR]
+        [--node-mass-ratio 0.3] [--kvisc 1] [--seed 1] [--packing legacy|pack]
+        [--contacts legacy|hard] [--output DIR]
     pyoif samples/validation/fahraeus_lindqvist.py --combine DIR [DIR ...] --output DIR
 
 References (D the tube diameter in um, H_D the discharge haematocrit):
@@ -54,6 +55,13 @@ random orientations). Wider tubes (more cells): random placement jams
 (D 15, 18 cells: at most 16 placed in 20000 tries), so the cells are packed
 greedily on a grid (discs facing along x, y or z) and n of the packed
 places drawn at random (packed_placements); the flow mixes them.
+--packing pack places them with oif.pack_cells instead (force-biased
+packing: it reaches the tube haematocrits of H_D 0.3-0.45, 0.32 at D 10,
+where the greedy grid stops near 0.21), and --contacts hard uses the
+advised hard_contact (oif.set_contacts) between the cells and with the
+wall instead of membrane_collision and soft-sphere; both are what
+robustness_map.py runs. The validated table in doc/validation.md is the
+legacy default.
 
 Flow. A uniform body force density f drives the fluid (a pressure gradient:
 it acts on the plasma and on the fluid inside the cells alike). f is set by
@@ -201,9 +209,16 @@ def flow_rate(fluid, length):
 
 
 def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strain=150.0, transient=50.0,
-             gamma_factor=1.0, seed=1, node_mass_ratio=NODE_MASS_RATIO, kvisc=KVISC, progress=None, vtk=None):
+             gamma_factor=1.0, seed=1, node_mass_ratio=NODE_MASS_RATIO, kvisc=KVISC, progress=None, vtk=None,
+             packing="legacy", contacts="legacy"):
     """One tube: the cell-free run, then the suspension. Returns (summary
-    dict, time series list of dicts)."""
+    dict, time series list of dicts).
+
+    packing: "legacy" (random seeding, or the greedy grid in wider tubes;
+    the validated default) or "pack" (oif.pack_cells: force-biased packing,
+    reaches the haematocrits of H_D 0.3-0.45); contacts: "legacy"
+    (membrane_collision and soft-sphere, as validated) or "hard" (the
+    advised hard_contact, oif.set_contacts, scaled like the legacy ones)."""
     for name, value in (("diameter", diameter), ("ca", ca), ("length_ratio", length_ratio), ("strain", strain),
                         ("gamma_factor", gamma_factor)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -212,6 +227,10 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
                                             and math.isfinite(node_mass_ratio) and 0 < node_mass_ratio <= 1):
         raise ValueError(f"run_tube: parameter 'node_mass_ratio' (gamma dt / m) must be in (0, 1] or None, "
                          f"got {node_mass_ratio!r}")
+    if packing not in ("legacy", "pack"):
+        raise ValueError(f"run_tube: parameter 'packing' must be 'legacy' or 'pack', got {packing!r}")
+    if contacts not in ("legacy", "hard"):
+        raise ValueError(f"run_tube: parameter 'contacts' must be 'legacy' or 'hard', got {contacts!r}")
     if not (isinstance(kvisc, (int, float)) and math.isfinite(kvisc) and kvisc >= 0):
         raise ValueError(f"run_tube: parameter 'kvisc' must be a finite number >= 0, got {kvisc!r}")
     if not 2.0 * RBC_RADIUS + 1.0 < diameter:
@@ -268,7 +287,10 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
     gamma = gamma_factor * ct.suggest_LBgamma(visc=VISC, dens=DENS)
     node_mass = 1.0 if node_mass_ratio is None else gamma * TIME_STEP / node_mass_ratio
     cells = None
-    for attempt in range(20 if diameter < 12.0 else 0):  # random placement in a narrow tube may need another seed
+    if packing == "pack":
+        cells = list(oif.pack_cells(system, ct, counts=n_cells, boundaries=[tube], particle_types=[CELL_TYPE],
+                                    particle_mass=node_mass, seed=seed))
+    for attempt in range(20 if diameter < 12.0 and cells is None else 0):  # random placement in a narrow tube may need another seed
         try:
             cells = oif.seed_cells(system, ct, counts=n_cells, boundaries=[tube], particle_types=[CELL_TYPE],
                                    seed=seed + 1000 * attempt, particle_mass=node_mass)
@@ -286,12 +308,18 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
     # through each other after strain 107 at D 10); the cells' contact reaches 1.0 um, beyond the mesh's
     # longest edge, 0.85 um (doc/accuracy.md, Contacts; at 0.8 and Ca 10 two membranes still crossed)
     scale = max(1.0, ca / 2.0)
-    system.non_bonded_inter[CELL_TYPE, WALL_TYPE].soft_sphere.set_params(a=WALL_A * scale, n=1.2, cutoff=0.5,
-                                                                       offset=0.0)
-    contact = CONTACT_A * scale
-    system.non_bonded_inter[CELL_TYPE, CELL_TYPE].membrane_collision.set_params(a=contact, n=4.0, cutoff=1.0,
-                                                                              offset=0.0)
+    if contacts == "hard":
+        contact = oif.set_contacts(system, [ct], particle_types=[CELL_TYPE], wall_types=[WALL_TYPE],
+                                   scale=scale)["cell"]["a"]
+    else:
+        system.non_bonded_inter[CELL_TYPE, WALL_TYPE].soft_sphere.set_params(a=WALL_A * scale, n=1.2,
+                                                                           cutoff=0.5, offset=0.0)
+        contact = CONTACT_A * scale
+        system.non_bonded_inter[CELL_TYPE, CELL_TYPE].membrane_collision.set_params(a=contact, n=4.0,
+                                                                                  cutoff=1.0, offset=0.0)
     v0 = np.array([c.volume() for c in cells])
+    s0 = np.array([c.surface() for c in cells])
+    worst_surface = 0.0
     chunk = max(1, int(round(SAMPLE_STRAIN / (gamma_w * TIME_STEP))))
     n_samples = int(math.ceil(strain / SAMPLE_STRAIN))
     series = []
@@ -310,7 +338,7 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
             n_window = sum(1 for r in series if r["strain"] > transient + 1e-9)
             if n_window < 2 * BLOCKS:
                 raise
-            stopped = f"strain {series[-1]['strain']:.1f}: {str(e).split(':')[0]}"
+            stopped = f"strain {series[-1]['strain']:.1f}: {getattr(e, 'cause', '')}: {str(e)[:400]}"
             break
         if cell_series:
             cell_series.write(cells, system.time)
@@ -318,6 +346,8 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
         origins = np.array([c.get_origin() for c in cells])
         vols = np.array([c.volume() for c in cells])
         worst_volume = max(worst_volume, float(np.max(np.abs(vols / v0 - 1.0))))
+        surface_dev = float(np.max(np.abs(np.array([c.surface() for c in cells]) / s0 - 1.0)))
+        worst_surface = max(worst_surface, surface_dev)
         dt = chunk * TIME_STEP
         u_cells = (origins[:, 0] - x_prev) / dt
         x_prev = origins[:, 0]
@@ -330,7 +360,7 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
         row = {"diameter": diameter, "time": system.time, "strain": gamma_w * chunk * TIME_STEP * (k + 1),
                "Q": q, "Q_interval": q_mean, "cell_flux": cell_flux, "eta_rel": q_plasma / q_mean,
                "H_D": cell_flux / q_mean, "mean_axis_offset_over_R": float(r_off.mean()) / radius,
-               "worst_volume_dev": float(np.max(np.abs(vols / v0 - 1.0))),
+               "worst_volume_dev": float(np.max(np.abs(vols / v0 - 1.0))), "worst_surface_dev": surface_dev,
                "min_wall_gap": radius - float(r_nodes.max())}
         series.append(row)
         if progress:
@@ -364,6 +394,7 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
         "gamma_dt_over_m": gamma * TIME_STEP / node_mass, "kvisc": kvisc, "contact_a": contact,
         "strain": series[-1]["strain"], "transient": transient,
         "window_samples": len(window), "stopped": stopped, "worst_volume_dev": worst_volume,
+        "worst_surface_dev": worst_surface, "packing": packing, "contacts": contacts,
         "final_axis_offset_over_R": series[-1]["mean_axis_offset_over_R"],
         "steps": chunk * len(series), "plasma_steps": plasma_steps, "cpu_s": cpu, "plasma_cpu_s": plasma_cpu,
         "seed": seed}
@@ -434,6 +465,10 @@ def main():
                         help="gamma dt / m of the membrane nodes: sets their mass m from the coupling "
                              "friction gamma (0.152 gives the former mass 1)")
     parser.add_argument("--kvisc", type=float, default=KVISC, help="membrane viscosity kvisc (lattice units)")
+    parser.add_argument("--packing", choices=("legacy", "pack"), default="legacy",
+                        help="cells placed by random seeding / a greedy grid (legacy) or oif.pack_cells (pack)")
+    parser.add_argument("--contacts", choices=("legacy", "hard"), default="legacy",
+                        help="membrane_collision + soft-sphere (legacy) or the advised hard_contact (hard)")
     parser.add_argument("--combine", nargs="+", default=None, metavar="DIR",
                         help="run nothing: join the CSVs of earlier runs' output folders into --output "
                              "(tables and figure)")
@@ -475,7 +510,7 @@ def main():
             s, ts = run_tube(d, ca=ca, hd_target=args.hd, ht=args.ht, length_ratio=args.length_ratio,
                              strain=args.strain, transient=args.transient, gamma_factor=args.gamma_factor,
                              seed=args.seed, node_mass_ratio=args.node_mass_ratio, kvisc=args.kvisc,
-                             progress=progress)
+                             progress=progress, packing=args.packing, contacts=args.contacts)
             for r in ts:
                 r["Ca"] = ca
             rows.append(s)

@@ -100,6 +100,27 @@ def _shapes(boundaries):
     return out
 
 
+def _confined_axes(shapes, lo, hi, box, clearance):
+    """Per axis: the fluid inside (lo, hi) outside every shape spans less
+    than the box length minus the clearance (sampled on a grid of about
+    1/40 of the region's shortest side)."""
+    confined = np.zeros(3, dtype=bool)
+    if not shapes:
+        return confined
+    spacing = max(float(np.min(hi - lo)) / 40.0, 1e-9)
+    counts = np.maximum(np.round((hi - lo) / spacing).astype(int), 1)
+    steps = (hi - lo) / counts
+    axes = [l + (np.arange(c) + 0.5) * st for l, c, st in zip(lo, counts, steps)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    fluid = np.ones(len(grid), dtype=bool)
+    for shape in shapes:
+        fluid &= _signed_distances(shape)(grid) > 0.0
+    if not fluid.any():
+        return confined
+    extent = np.ptp(grid[fluid], axis=0) + 2.0 * steps  # the cells' half a step beyond either end
+    return extent + clearance < box
+
+
 def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None, boundaries=(), region=None,
                particle_types=None, particle_mass=1.0, seed=None, clearance=None, wall_clearance=None,
                rotation_axis=None, max_iterations=20000, create=True, exclusion_neighbours=True,
@@ -228,7 +249,12 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     for b, ti in enumerate(order):
         quats[b] = (_quaternion(rng) if axis is None else _axis_quaternion(axis, 2 * np.pi * rng.random()))
     packer.set_bodies(np.asarray(order, dtype=np.int32), centres, quats)
-    settings = dict(box=box.tolist(), periodic=periodic.tolist(), clearance=clearance,
+    # a periodic axis across which the boundaries confine the fluid to less
+    # than the box (a tube across a periodic box): no cell can meet its own
+    # image there, so the packer treats it as closed (its box faces lie
+    # outside the fluid)
+    packer_periodic = periodic & ~_confined_axes(shapes, lo, hi, box, clearance)
+    settings = dict(box=box.tolist(), periodic=packer_periodic.tolist(), clearance=clearance,
                     wall_clearance=wall_clearance, max_iterations=int(max_iterations), final_tolerance=0.05,
                     start_scale=START_SCALE,
                     seed=int(seed or 0))
