@@ -123,11 +123,11 @@ def scene_boundaries(node_grid, single_precision=False):
     return dict(system=system, lbf=lbf, cells=[], force=force)
 
 
-def scene_cells(node_grid, force_x=5e-4, kT=0.0):
+def scene_cells(node_grid, force_x=5e-4, kT=0.0, kvisc=0.0):
     box = (25.0, 12.0, 10.0)
     system = new_system(box, node_grid)
     rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(2.5, 2.5, 2.5),
-                          ks=0.02, kb=0.02, kal=0.02, kag=0.7, kv=0.9, normal=True)
+                          ks=0.02, kb=0.02, kal=0.02, kag=0.7, kv=0.9, normal=True, kvisc=kvisc)
     ball = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(2.0, 2.0, 2.0),
                            ks=0.05, kb=0.05, kal=0.05, kag=0.7, kv=0.9, normal=True)
     cells = [oif.OifCell(cell_type=rbc, particle_type=0, origin=[12.0, 3.5, 5.0]),        # x = 12
@@ -215,6 +215,8 @@ SCENES = {"fluid": lambda grid: scene_fluid(grid),
           "boundaries_single": lambda grid: scene_boundaries(grid, single_precision=True),
           "cells": scene_cells,
           "cells_thermal": scene_cells_thermal,
+          # the red cells' membrane viscosity implicit (dt kvisc_node / m 30)
+          "cells_viscous": lambda grid: scene_cells(grid, kvisc=50.0),
           "crossing": scene_crossing,
           "open_channel": scene_open_channel}
 ALL_SCENES = tuple(SCENES) + ("bifurcation",)

@@ -37,7 +37,7 @@ MPIRUN = shutil.which("mpirun") or shutil.which("mpiexec")
 SCENE_SCRIPT = os.path.join(HERE, "mpi_scenes.py")
 
 RANKS = (2, 3, 4)
-STEPS = {"fluid": 40, "fluid_thermal": 40, "boundaries": 60, "boundaries_single": 60, "cells": 100, "cells_thermal": 100, "crossing": 300, "open_channel": 100,
+STEPS = {"fluid": 40, "fluid_thermal": 40, "boundaries": 60, "boundaries_single": 60, "cells": 100, "cells_viscous": 100, "cells_thermal": 100, "crossing": 300, "open_channel": 100,
          "bifurcation": 200}
 KT_THERMAL = 1e-3          # mpi_scenes.scene_fluid(thermal=True)
 KT_CELLS = 1e-4            # mpi_scenes.scene_cells_thermal
@@ -274,6 +274,12 @@ class MpiEquality(unittest.TestCase):
 
     def test_cells(self):
         self.check_scene("cells", lambda r: self.check_cells(r, volume_rtol=0.01, surface_rtol=0.01, min_shift=0.0))
+
+    def test_cells_viscous(self):
+        """The implicit membrane viscosity (a per-cell solve on every rank
+        that evaluates the cell) gives the serial result bit for bit."""
+        self.check_scene("cells_viscous", lambda r: self.check_cells(r, volume_rtol=0.01, surface_rtol=0.01,
+                                                                     min_shift=0.0))
 
     def test_cells_thermal(self):
         def sane(r):
