@@ -6,11 +6,14 @@
 // Karniadakis, Biophys. J. 98, 2215, 2010, with only their central term).
 //
 // Why implicit. Written as a force of the current velocities, the dashpots
-// are stable only while dt kvisc / m stays below about 1/6 (a node has six
-// edges; the highest mode, neighbours moving against each other, overshoots
-// beyond it: kvisc 2 at the samples' dt 0.1 and node mass 0.51 blew up in
-// the first steps). A red cell's membrane viscosity (Hochmuth, Worthy, Evans,
-// Biophys. J. 26, 101, 1979: 0.6-0.8 uN s/m, kvisc ~ 1400 in um, us,
+// are stable only while dt kvisc / m stays below about 1/3 (the highest mode
+// of a six-neighbour mesh, neighbours moving against each other, has the
+// rate 6 kvisc / m, and an explicit damping step overshoots beyond a rate
+// of 2 / dt: kvisc 2 at the samples' dt 0.1 and node mass 0.51 blew up in
+// the first steps). Where dt times a node's summed kvisc over m stays within
+// 1.5 (75 % of that limit) the pass keeps the explicit force
+// (Model::explicit_viscosity_limit); beyond it, this solve. A red cell's membrane viscosity
+// (Hochmuth, Worthy, Evans, Biophys. J. 26, 101, 1979: 0.6-0.8 uN s/m, kvisc ~ 1400 in um, us,
 // 1e-15 kg) is three orders beyond. So the velocities are advanced by
 // backward Euler over the time step, which damps every mode and overshoots
 // none at any kvisc:
