@@ -208,8 +208,11 @@ void System::check_membrane_crossing(const PairContext& c, int id_i, int id_j) c
   msg << "membranes crossed: node " << id_i << " of the cell with mol_id " << c.mol_i << " is "
       << inside_j << " inside the membrane of the cell with mol_id " << c.mol_j << " (its node "
       << id_j << " likewise " << inside_i << " inside the first) at time " << time
-      << ". The cell-cell contact is too weak for this flow: raise membrane_collision's a or "
-         "cutoff, or lower the time step (system.cell_checks = False lets cells pass)";
+      << ". The cell-cell contact did not hold: with membrane_collision raise its a or cutoff "
+         "(or use hard_contact, oif.set_contacts); hard_contact's offset covers the triangles "
+         "of the relaxed mesh, and a membrane stretched well beyond them can let a node "
+         "through: lower the flow or raise the offset; or lower the time step "
+         "(system.cell_checks = False lets cells pass)";
   throw SimulationInstability("membrane_crossing", msg.str())
       .at_particle(id_i)
       .in_cell(c.mol_i)
