@@ -1,5 +1,7 @@
 #include "packing/rigid_packer.hpp"
 
+#include "packing/mesh_check.hpp"
+
 #include "utils/errors.hpp"
 #include "utils/random.hpp"
 
@@ -29,7 +31,8 @@ int RigidPacker::add_type(const std::vector<Vec3>& nodes,
   // cell still feels which way is out
   t.level_set =
       std::make_unique<LevelSet>(nodes, triangles, spacing, 0.5 * t.thinnest + 2 * spacing);
-  // patches: the nodes binned on a grid of 1/6 of the cell's largest extent (measured: 10 % faster than 1/8, 1/4 and 1/12 slower)
+  // patches: the nodes binned on a grid of 1/6 of the cell's largest extent (measured: 10 % faster
+  // than 1/8, 1/4 and 1/12 slower)
   const double bin = std::max((hi - lo).maxCoeff() / 6.0, 1e-12);
   std::map<std::array<int, 3>, std::vector<int>> bins;
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -220,19 +223,34 @@ void RigidPacker::push_from_walls(int b, double scale, const PackerSettings& s) 
     m_worst_wall = std::max(m_worst_wall, overlap);
   };
   const double wc = s.wall_clearance;
+  // the shapes see the nodes folded into the box along the periodic axes,
+  // as the engine's walls do: a cell hanging across a periodic face meets
+  // the walls at the box's other end (a device's channel walls that end
+  // at the box face)
+  bool wraps = false;
+  for (int k = 0; k < 3; ++k)
+    wraps |= s.periodic[k] &&
+             (m_centre[b][k] - reach - wc < 0.0 || m_centre[b][k] + reach + wc > s.box[k]);
+  const Vec3* at = nodes;
+  if (wraps) {
+    m_folded.assign(nodes, nodes + count);
+    for (Vec3& x : m_folded)
+      x = fold_into_box(x, s);
+    at = m_folded.data();
+  }
   for (const auto& shape : m_boundaries) {
     double d_centre;
     Vec3 normal;
     shape->calc_dist(m_centre[b], d_centre, normal);
-    if (d_centre > reach + wc)
+    if (!wraps && d_centre > reach + wc)
       continue;
     m_dist.resize(count);
-    shape->signed_distances(nodes, count, wc, m_dist.data());
+    shape->signed_distances(at, count, wc, m_dist.data());
     for (std::size_t k = 0; k < count; ++k) {
       if (m_dist[k] >= wc)
         continue;
       double d;
-      shape->calc_dist(nodes[k], d, normal);
+      shape->calc_dist(at[k], d, normal);
       push(nodes[k], wc - d, normal);
     }
   }
@@ -267,6 +285,8 @@ void RigidPacker::push_from_walls(int b, double scale, const PackerSettings& s) 
 PackerResult RigidPacker::run(const PackerSettings& s) {
   require(!m_type.empty(), "pack_cells: no cells to pack");
   require(s.start_scale > 0.0 && s.start_scale <= 1.0, "pack_cells: start scale must be in (0, 1]");
+  require(s.final_scale >= s.start_scale && s.final_scale <= 1.0,
+          "pack_cells: final scale must be in [start scale, 1]");
   double reach = 0.0;
   for (const auto& t : m_types)
     reach = std::max(reach, t.reach);
@@ -285,6 +305,9 @@ PackerResult RigidPacker::run(const PackerSettings& s) {
   m_body_overlap.assign(n, 0.0);
   m_body_worst.assign(n, 0.0);
   m_spin.assign(n, Vec3::Zero());
+  // the last iteration that made progress (see stall_iterations)
+  int progress_it = 0;
+  double progress_scale = scale, progress_worst = HUGE_VAL;
   for (int it = 0; it < s.max_iterations; ++it) {
     world_nodes(scale);
     if (it % 4 == 0)
@@ -310,8 +333,16 @@ PackerResult RigidPacker::run(const PackerSettings& s) {
     result.scale = scale;
     result.worst_overlap = m_worst;
     result.worst_wall_overlap = m_worst_wall;
-    if (scale >= 1.0 && worst <= s.final_tolerance * s.clearance) {
+    if (scale >= s.final_scale && worst <= s.final_tolerance * s.clearance) {
       result.converged = true;
+      break;
+    }
+    if (scale > 1.001 * progress_scale || worst < (1.0 - s.stall_overlap_drop) * progress_worst) {
+      progress_it = it;
+      progress_scale = scale;
+      progress_worst = worst;
+    } else if (s.stall_iterations > 0 && it - progress_it >= s.stall_iterations) {
+      result.jammed = true;
       break;
     }
     // overdamped step with momentum (heavy ball, restarted where it
@@ -361,8 +392,8 @@ PackerResult RigidPacker::run(const PackerSettings& s) {
     // grow the faster the smaller the worst overlap
     const double mean = m_overlap_count ? m_overlap_sum / m_overlap_count : 0.0;
     const double room = 1.0 - mean / (s.grow_tolerance * s.clearance);
-    if (scale < 1.0 && room > 0.0)
-      scale = std::min(1.0, scale * (1.0 + s.growth * room));
+    if (scale < s.final_scale && room > 0.0)
+      scale = std::min(s.final_scale, scale * (1.0 + s.growth * room));
   }
   return result;
 }
@@ -375,7 +406,6 @@ PackingCheck RigidPacker::check(const PackerSettings& s) const {
   PackingCheck out;
   const double search = s.clearance + 1.0;
   out.min_node_distance = search;
-  out.min_wall_distance = HUGE_VAL;
   std::vector<Vec3> nodes(m_first_node.back());
   std::vector<Eigen::Matrix3d> rot(m_type.size());
   for (std::size_t b = 0; b < m_type.size(); ++b) {
@@ -423,13 +453,7 @@ PackingCheck RigidPacker::check(const PackerSettings& s) const {
       }
     }
   }
-  std::vector<double> dist;
-  for (const auto& shape : m_boundaries) {
-    dist.resize(nodes.size());
-    shape->signed_distances(nodes.data(), nodes.size(), HUGE_VAL, dist.data());
-    for (double d : dist)
-      out.min_wall_distance = std::min(out.min_wall_distance, d);
-  }
+  out.min_wall_distance = min_wall_distance(std::move(nodes), m_boundaries, s);
   return out;
 }
 

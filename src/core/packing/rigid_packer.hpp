@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -34,6 +35,11 @@ struct PackerSettings {
   Vec3 region_lo = Vec3::Zero(), region_hi = Vec3::Zero();
   bool has_region = false;
   double start_scale = 0.5;
+  /** The size the cells grow to (1: their reference size). Below 1, the
+   *  packing of rigid cells that the deformable stage of oif.pack_cells
+   *  starts from: the cells there are created this much shrunken and
+   *  swell to their reference volume under their contacts. */
+  double final_scale = 1.0;
   /** Relative growth of the scale per iteration, slowed as the mean overlap
    *  of the contacts approaches `grow_tolerance` x clearance. */
   double growth = 0.01;
@@ -42,16 +48,30 @@ struct PackerSettings {
   double step = 0.8;
   /** Share of a body's last move carried into the next (0: plain descent). */
   double momentum = 0.9;
-  /** Done when the scale is 1 and no node is closer than
+  /** Done when the scale is final_scale and no node is closer than
    *  (1 - final_tolerance) x clearance. */
   double final_tolerance = 0.02;
   int max_iterations = 20000;
+  /** Stop early (jammed) when for this many iterations the scale has not
+   *  grown by 0.1 % and the worst overlap not fallen by the share
+   *  stall_overlap_drop (0: never). */
+  int stall_iterations = 0;
+  double stall_overlap_drop = 0.01;
   /** Seed of the kicks that separate cells stuck about one centre. */
   std::uint64_t seed = 0;
 };
 
+/** x folded into the box along the periodic axes of the settings. */
+inline Vec3 fold_into_box(Vec3 x, const PackerSettings& s) {
+  for (int k = 0; k < 3; ++k)
+    if (s.periodic[k])
+      x[k] -= s.box[k] * std::floor(x[k] / s.box[k]);
+  return x;
+}
+
 struct PackerResult {
   bool converged = false;
+  bool jammed = false; ///< stopped by stall_iterations
   int iterations = 0;
   double scale = 0.0;
   double worst_overlap = 0.0; ///< clearance - least node distance (level set), at the end
@@ -128,6 +148,7 @@ private:
   double m_worst = 0.0, m_worst_wall = 0.0, m_overlap_sum = 0.0;
   long m_overlap_count = 0;
   std::vector<double> m_dist; ///< scratch: signed distances of one body's nodes
+  std::vector<Vec3> m_folded; ///< scratch: one body's nodes folded into the box
 };
 
 } // namespace pyoif::packing

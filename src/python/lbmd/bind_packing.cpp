@@ -3,6 +3,7 @@
 // arrays; the packing itself runs without the GIL.
 #include "bindings.hpp"
 
+#include "packing/mesh_check.hpp"
 #include "packing/rigid_packer.hpp"
 #include "utils/errors.hpp"
 
@@ -55,6 +56,8 @@ packing::PackerSettings settings_from(const py::dict& d) {
       s.has_region = true;
     } else if (key == "start_scale")
       s.start_scale = v.cast<double>();
+    else if (key == "final_scale")
+      s.final_scale = v.cast<double>();
     else if (key == "growth")
       s.growth = v.cast<double>();
     else if (key == "grow_tolerance")
@@ -69,15 +72,58 @@ packing::PackerSettings settings_from(const py::dict& d) {
       s.step = v.cast<double>();
     else if (key == "max_iterations")
       s.max_iterations = v.cast<int>();
+    else if (key == "stall_iterations")
+      s.stall_iterations = v.cast<int>();
+    else if (key == "stall_overlap_drop")
+      s.stall_overlap_drop = v.cast<double>();
     else
       throw InputError("pack_cells: unknown packer setting '" + key + "'");
   }
   return s;
 }
 
+py::dict check_dict(const packing::PackingCheck& c) {
+  py::dict out;
+  out["nodes_inside_cells"] = c.nodes_inside_cells;
+  out["min_node_distance"] = c.min_node_distance;
+  out["min_wall_distance"] = c.min_wall_distance;
+  out["pairs_tested"] = c.pairs_tested;
+  return out;
+}
+
 } // namespace
 
 void bind_packing(py::module_& m) {
+  // the deformable stage's exact check: cells as they are (mesh_check.hpp)
+  m.def(
+      "check_meshes",
+      [](const RealArray& nodes, const std::vector<std::size_t>& first_node,
+         const std::vector<int>& types, const std::vector<IntArray>& triangles,
+         const std::vector<std::shared_ptr<const shapes::Shape>>& boundaries,
+         const py::dict& settings, double search) {
+        packing::MeshSet cells;
+        cells.nodes = rows3(nodes, "nodes");
+        cells.first_node = first_node;
+        cells.type = types;
+        for (const auto& t : triangles) {
+          require(t.ndim() == 2 && t.shape(1) == 3, "pack_cells: triangles must be (m, 3)");
+          auto v = t.unchecked<2>();
+          std::vector<std::array<int, 3>> tris(t.shape(0));
+          for (py::ssize_t r = 0; r < t.shape(0); ++r)
+            tris[r] = {v(r, 0), v(r, 1), v(r, 2)};
+          cells.triangles.push_back(std::move(tris));
+        }
+        const auto s = settings_from(settings);
+        packing::PackingCheck c;
+        {
+          py::gil_scoped_release release;
+          c = packing::check_meshes(cells, boundaries, s, search);
+        }
+        return check_dict(c);
+      },
+      py::arg("nodes"), py::arg("first_node"), py::arg("types"), py::arg("triangles"),
+      py::arg("boundaries"), py::arg("settings"), py::arg("search"));
+
   using packing::RigidPacker;
   py::class_<RigidPacker>(m, "RigidPacker")
       .def(py::init<>())
@@ -126,6 +172,7 @@ void bind_packing(py::module_& m) {
             }
             py::dict out;
             out["converged"] = r.converged;
+            out["jammed"] = r.jammed;
             out["iterations"] = r.iterations;
             out["scale"] = r.scale;
             out["worst_overlap"] = r.worst_overlap;
@@ -142,12 +189,7 @@ void bind_packing(py::module_& m) {
               py::gil_scoped_release release;
               c = p.check(s);
             }
-            py::dict out;
-            out["nodes_inside_cells"] = c.nodes_inside_cells;
-            out["min_node_distance"] = c.min_node_distance;
-            out["min_wall_distance"] = c.min_wall_distance;
-            out["pairs_tested"] = c.pairs_tested;
-            return out;
+            return check_dict(c);
           },
           py::arg("settings"))
       .def("centres",
