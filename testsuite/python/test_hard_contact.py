@@ -90,6 +90,27 @@ class TestHardContact(unittest.TestCase):
         guard = (A * N * CUTOFF ** N * 0.1 ** 2 / 1.0) ** (1.0 / (N + 1.0))
         self.assertAlmostEqual(s.non_bonded_inter[0, 0].hard_contact.get_params()["guard_gap"], guard, places=14)
 
+    def test_packing_clearance_leaves_twice_the_guard_gap(self):
+        """oif.contacts.guard_gap is the engine's guard gap of the advised
+        contact (set_contacts at a scale), and packing_clearance leaves
+        twice it beyond the offset where that exceeds PACKING_MARGIN (the
+        flagship's 27x contacts and light nodes)."""
+        import oif
+        s = lbmd.System(box_l=[20.0, 20.0, 20.0])
+        s.time_step = 0.1
+        ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(3.91,) * 3, kv=0.9)
+        oif.set_contacts(s, ct, particle_types=0, scale=27.0)
+        oif.OifCell(cell_type=ct, particle_type=0, origin=[10.0, 10.0, 10.0], particle_mass=0.05)
+        s.integrator.run(1)  # the guards are computed at a run's start
+        engine = s.non_bonded_inter[0, 0].hard_contact.get_params()["guard_gap"]
+        self.assertAlmostEqual(oif.contacts.guard_gap(oif.contacts.CONTACT_A * 27.0, 0.1, 0.05), engine, places=12)
+        offset = oif.contacts.contact_offset(ct)
+        stiff = oif.contacts.packing_clearance(ct, scale=27.0, time_step=0.1, node_mass=0.05)
+        self.assertGreater(2.0 * engine, oif.contacts.PACKING_MARGIN)
+        self.assertAlmostEqual(stiff - offset, 2.0 * engine, places=12)
+        self.assertAlmostEqual(oif.contacts.packing_clearance(ct, time_step=0.1, node_mass=1.0) - offset,
+                               oif.contacts.PACKING_MARGIN, places=12)
+
     def test_wall_overrun_is_named(self):
         s = lbmd.System(box_l=[12.0, 12.0, 12.0])
         s.time_step = 0.1

@@ -123,6 +123,82 @@ class TestPackCells(unittest.TestCase):
         self.assertAlmostEqual(v, r["haematocrit"], places=9)
         self.assertGreater(v, 0.34)
 
+    def test_deformable_stage_in_a_narrow_tube_at_045(self):
+        """A D 10 um tube at 0.45: rigid discs jam (the wall layer and the
+        contacts' clearance), so the cells swell as deformable cells from a
+        slightly smaller rigid packing (doc/oif.md, "Packing"). Every cell
+        at its reference volume and surface within 0.5 %, none of its nodes
+        inside another cell (winding numbers) or nearer another cell's
+        nodes than the advised contact's offset (so no contact starts
+        crossed), every node inside the tube by half the wall clearance,
+        and the same seed giving the same nodes. deformable=False names
+        the way out."""
+        def pack(**kw):
+            s = lbmd.System(box_l=[44.0, 12.0, 12.0])
+            tube = shapes.Cylinder(center=[22.0, 6.0, 6.0], axis=[1, 0, 0], radius=5.0, length=132.0, direction=-1,
+                                   open=True)
+            ct = rbc(s)
+            return s, ct, oif.pack_cells(s, ct, haematocrit=0.45, boundaries=[tube], seed=4, **kw)
+
+        with self.assertRaisesRegex(oif.PackingError, r"deformable=True"):
+            pack(deformable=False)
+        s, ct, cells = pack()
+        r = cells.report
+        self.assertEqual(r["method"], "rigid+deformable")
+        self.assertTrue(r["converged"])
+        self.assertFalse(r["rigid_converged"])
+        self.assertEqual(len(cells), 17)
+        self.assertGreaterEqual(r["haematocrit"], 0.45)
+        self.assertLess(r["rigid_scale"], 1.0)
+        for c in cells:
+            self.assertLess(abs(c.volume() / ct.volume0 - 1.0), 0.005)
+            self.assertLess(abs(c.surface() / ct.surface0 - 1.0), 0.005)
+        self.assertEqual(r["nodes_inside_cells"], 0)
+        self.assertEqual(nodes_inside_other_cells(cells, np.array(s.box_l), np.array([True, False, False])), 0)
+        pos = [c.mesh.positions() for c in cells]
+        closest = np.inf
+        for i in range(len(pos)):
+            for j in range(i + 1, len(pos)):
+                d = pos[i].mean(axis=0) - pos[j].mean(axis=0)
+                shift = np.array([44.0 * np.round(d[0] / 44.0), 0.0, 0.0])
+                q = pos[j] + shift
+                if np.linalg.norm(d - shift) < 10.0:
+                    closest = min(closest, np.sqrt(((pos[i][:, None] - q[None]) ** 2).sum(axis=2)).min())
+        offset = oif.contacts.contact_offset(ct)
+        # the deformable stage's contact keeps half the packing's margin
+        self.assertGreater(closest, offset + 0.5 * (r["clearance"] - offset))
+        self.assertAlmostEqual(closest, r["min_node_distance"], places=9)
+        nodes = np.concatenate(pos)
+        self.assertGreater(5.0 - np.hypot(nodes[:, 1] - 6.0, nodes[:, 2] - 6.0).max(), 0.5 * r["wall_clearance"])
+        # the cells are deformed (not the rigid packing's shapes): the
+        # swelling did the work
+        ref = ct.mesh._nodes - ct.mesh._nodes.mean(axis=0)
+        def radius_of_gyration(x):
+            return np.sqrt(((x - x.mean(axis=0)) ** 2).sum(axis=1).mean())
+        self.assertGreater(max(abs(radius_of_gyration(x) / radius_of_gyration(ref) - 1.0) for x in pos), 0.005)
+        _, _, again = pack()
+        for a, b in zip(cells, again):
+            np.testing.assert_array_equal(a.mesh.positions(), b.mesh.positions())
+
+    def test_mesh_check_of_two_overlapping_cells(self):
+        """The deformable stage's exact check (check_meshes) against a
+        brute-force count: two spheres moved 1.5 um into each other."""
+        from lbmd import _lbmd
+        s = lbmd.System(box_l=[20.0, 20.0, 20.0])
+        sph = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(2.0,) * 3)
+        a = sph.mesh._nodes - sph.mesh._nodes.mean(axis=0) + 10.0
+        b = a + [2.5, 0.0, 0.0]
+        tris = oif.mesh_io.outward(sph.mesh._topo.triangles)
+        wall = shapes.Wall(normal=[0, 0, 1], dist=8.5)
+        out = _lbmd.check_meshes(np.concatenate([a, b]), [0, len(a), 2 * len(a)], [0, 0], [tris], [wall._core],
+                                 dict(box=[20.0] * 3, periodic=[True] * 3), 3.0)
+        inside = int((_winding(b, a, tris) > 0.5).sum() + (_winding(a, b, tris) > 0.5).sum())
+        self.assertGreater(inside, 0)
+        self.assertEqual(out["nodes_inside_cells"], inside)
+        closest = np.sqrt(((a[:, None] - b[None]) ** 2).sum(axis=2)).min()
+        self.assertAlmostEqual(out["min_node_distance"], closest, places=12)
+        self.assertAlmostEqual(out["min_wall_distance"], np.concatenate([a, b])[:, 2].min() - 8.5, places=12)
+
     def test_errors(self):
         s = lbmd.System(box_l=[20.0, 20.0, 20.0])
         ct = rbc(s)
@@ -132,8 +208,10 @@ class TestPackCells(unittest.TestCase):
             oif.pack_cells(s, ct)
         with self.assertRaisesRegex(oif.PackingError, "cannot be packed"):
             oif.pack_cells(s, ct, haematocrit=0.8)
-        with self.assertRaisesRegex(oif.PackingError, r"reached .* haematocrit"):
+        with self.assertRaisesRegex(oif.PackingError, r"reached .*haematocrit.*still growing"):
             oif.pack_cells(s, ct, haematocrit=0.6, seed=1, max_iterations=300)
+        with self.assertRaisesRegex(TypeError, "deformable"):
+            oif.pack_cells(s, ct, haematocrit=0.3, deformable=1)
         self.assertEqual(len(s.part), 0)  # nothing created by a failed packing
         oif.OifCell(cell_type=ct, particle_type=0, origin=[10, 10, 10])
         with self.assertRaisesRegex(ValueError, "already holds 374 particles"):

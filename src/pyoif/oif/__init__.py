@@ -11,8 +11,11 @@ and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
 - ``oif.mesh_files(name)``: the shipped meshes (spheres and Evans-Fung
   red blood cells, see ``oif/meshes/README.md``),
 - ``oif.seed_cells``: random non-overlapping placement of many cells,
-- ``oif.pack_cells``: cells packed to a haematocrit up to about 0.45, at
-  their reference shape (force-biased growth of rigid cells),
+- ``oif.pack_cells``: cells packed to a haematocrit of 0.45, at their
+  reference volume and surface (force-biased growth of rigid cells, then,
+  where rigid cells jam, deformable ones swollen into place),
+- ``oif.fluid_volume``: the volume of a region outside boundary shapes
+  (what a haematocrit is a share of),
 - ``oif.contact_settings`` / ``oif.set_contacts``: the advised
   hard_contact between cells and between cells and walls,
 - ``oif.CellFlow``: cells leaving at an outlet and entering at an inlet
@@ -34,7 +37,7 @@ from .oif_utils import (custom_str, get_triangle_normal, norm, vec_distance, are
                         oif_calc_bending_force, oif_calc_local_area_force,
                         oif_calc_global_area_force, oif_calc_volume_force,
                         output_vtk_rhomboid, output_vtk_cylinder, output_vtk_pore, output_vtk_lines)
-from .seeding import seed_cells, SeedingError  # noqa: F401
+from .seeding import seed_cells, SeedingError, fluid_volume  # noqa: F401
 from .packing import pack_cells, PackingError, PackedCells, covering_radius  # noqa: F401
 from . import contacts  # noqa: F401
 from .contacts import contact_settings, set_contacts  # noqa: F401
@@ -65,5 +68,5 @@ __all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbo
            "angle_btw_triangles", "discard_epsilon", "oif_neo_hookean_nonlin", "oif_calc_stretching_force",
            "oif_calc_linear_stretching_force", "oif_calc_bending_force", "oif_calc_local_area_force",
            "oif_calc_global_area_force", "oif_calc_volume_force", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
-           "output_vtk_lines", "seed_cells", "SeedingError", "pack_cells", "PackingError", "PackedCells", "covering_radius",
+           "output_vtk_lines", "seed_cells", "SeedingError", "fluid_volume", "pack_cells", "PackingError", "PackedCells", "covering_radius",
            "contacts", "contact_settings", "set_contacts", "CellFlow", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

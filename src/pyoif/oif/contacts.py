@@ -48,10 +48,24 @@ def contact_settings(cell_types):
     return {"cell": cell, "wall": wall}
 
 
-def packing_clearance(cell_types):
-    """The packer's default clearance (oif.pack_cells): the contact's offset
-    plus PACKING_MARGIN."""
-    return contact_offset(cell_types) + PACKING_MARGIN
+def guard_gap(a, time_step, node_mass, n=CONTACT_N, cutoff=CONTACT_CUTOFF):
+    """The gap below which hard_contact's stiffness outruns the time step
+    (k dt^2 / m = 1, k = a n cutoff^n / h^(n+1); doc/interactions.md): a
+    run that starts with a gap below it stops at once with contact_overrun."""
+    return float((a * n * cutoff ** n * time_step ** 2 / node_mass) ** (1.0 / (n + 1.0)))
+
+
+def packing_clearance(cell_types, scale=1.0, time_step=None, node_mass=None):
+    """The packer's clearance (oif.pack_cells): the contact's offset plus
+    PACKING_MARGIN, or, given the run's time step and node mass, plus twice
+    the guard gap of the advised contact at `scale` (set_contacts) where
+    that is more: a scene with stiffened contacts and light nodes (the
+    flagship at 27x: guard gap 0.05 um) needs its cells packed further
+    apart than PACKING_MARGIN."""
+    margin = PACKING_MARGIN
+    if time_step is not None and node_mass is not None:
+        margin = max(margin, 2.0 * guard_gap(CONTACT_A * scale, time_step, node_mass))
+    return contact_offset(cell_types) + margin
 
 
 def set_contacts(system, cell_types, particle_types, wall_types=(), scale=1.0):

@@ -800,6 +800,24 @@ class OifCellType:
             self.out_direction_interaction = inter.OifOutDirection()
             self.out_direction_bond_id = system.bonded_inter.add(self.out_direction_interaction)
 
+    def copy_to(self, system, **moduli):
+        """This type on another lbmd.System: the same relaxed mesh (nodes as
+        this type holds them, so an origin and rotation place its cells
+        alike), normals and moduli; keyword arguments replace moduli (e.g.
+        kvisc=0). For scratch systems: the settings check's membrane trial
+        and the deformable stage of oif.pack_cells."""
+        import tempfile
+        unknown = sorted(set(moduli) - {"ks", "kslin", "kb", "kal", "kag", "kv", "kvisc"})
+        if unknown:
+            raise TypeError(f"OifCellType.copy_to: unknown moduli {unknown}")
+        values = {k: getattr(self, k) for k in ("ks", "kslin", "kb", "kal", "kag", "kv", "kvisc")}
+        values.update(moduli)
+        with tempfile.TemporaryDirectory() as tmp:
+            nf, tf = os.path.join(tmp, "nodes.dat"), os.path.join(tmp, "triangles.dat")
+            np.savetxt(nf, self.mesh._nodes, fmt="%.17g")
+            np.savetxt(tf, self.mesh._topo.triangles, fmt="%d")
+            return OifCellType(nf, tf, system=system, normal=self.normal, check_orientation=False, **values)
+
     # engine bond rows, in mesh node ids -------------------------------------
     def _local_rows(self):
         """OifLocalForces rows as ESPResSo's PyOIF added them: the bond is owned

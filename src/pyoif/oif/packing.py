@@ -25,6 +25,26 @@ needs: every node of one cell at least the contact's offset plus a margin
 away from every node of another, so the first step of a run starts with
 every contact within its range.
 
+Where rigid cells jam before their full size (in tubes and between walls
+above a haematocrit of about 0.35: the wall layer and the contacts'
+clearance leave no room for rigid discs), the deformable stage takes over
+(``deformable=True``, the default): the rigid packing is settled a little
+smaller than where it jammed, the cells are made there as deformable OIF
+cells with their reference moduli in a scratch System of their own (no
+fluid, no thermal noise; a friction damps them) and swell to their
+reference volume and surface under the advised contact (hard_contact,
+which no squeeze crosses) at a tenth of its strength and under the walls'
+contact, until every cell's volume and surface are within
+SWELL_TOLERANCE of the reference. The cells end deformed as blood cells
+are at that haematocrit, at their reference volume and surface, and
+carry the elastic stress of that shape into the run. The rigid stage does
+most of the work first, at no membrane cost; the swelling then only has
+to find room for the last few per cent of the cells' volume. Why a tenth of the contact's strength: at the full strength
+the contacts between all the cells at 0.45 keep the most squeezed cells
+1-2 % below their reference surface (measured, D 20 um tube); weaker, the
+gaps are smaller and the cells reach their reference, still with every
+node at least the contact's offset from the other cells (nothing crossed).
+
 After packing, the meshes are checked exactly: winding numbers of the nodes
 near another cell (no node inside another cell), node-to-node distances
 between cells and the nodes' signed distances to the boundaries. The
@@ -44,6 +64,43 @@ from .seeding import (SeedingError, _count, _length, _per_type, _ptype, _region,
 
 #: the cells' size at the start of the growth (the C++ packer's default)
 START_SCALE = 0.5
+#: rigid iterations without growth or the worst overlap falling by
+#: STALL_OVERLAP_DROP after which the rigid cells count as jammed (and the
+#: deformable stage takes over). A D 40 um tube at 0.45 crept on at 1 % per
+#: 1000 iterations for 11000 iterations (380 s) before it stopped rigid.
+STALL_ITERATIONS, STALL_OVERLAP_DROP = 1000, 0.05
+#: the sizes, relative to where the rigid cells jammed, tried in turn for
+#: the clean rigid packing the deformable stage starts from
+SWELL_START = (0.99, 0.98, 0.96, 0.94, 0.92, 0.9)
+#: below this rigid size the cells are too dense to swell (their volume
+#: would have to double): PackingError
+SWELL_LEAST_SCALE = 0.8
+#: the deformable stage: every cell's volume and surface within this
+#: relative deviation of the reference (below the 0.5 % promised)
+SWELL_TOLERANCE = 0.0045
+#: its time step, node mass and Langevin friction (kT 0). The swelling is
+#: overdamped, so its steps go as friction / time step: 0.5 and 0.1 swell a
+#: D 20 um tube at 0.45 in 1800 steps; at a time step of 0.2 or a friction
+#: of 0.25 the first steps' push closed a contact below its guard gap. The
+#: time step is halved while the settings check's membrane trial finds it
+#: unstable for a cell type's moduli; a contact overrun restarts the stage
+#: at SWELL_FRICTION_RETRY times the friction.
+SWELL_TIME_STEP, SWELL_MASS, SWELL_FRICTION = 0.1, 1.0, 0.5
+SWELL_FRICTION_RETRY = (1.0, 4.0, 16.0)
+#: the contact's force scale in the deformable stage, relative to the
+#: advised one: the advised contact while the cells swell fast (a weak one
+#: is too stiff for the time step under that push: an overdamped contact
+#: holds a push up to about sqrt(2 a cutoff friction / dt)), a tenth of it
+#: from when the mean volume deficit is below SWELL_WEAKEN_AT (or after
+#: SWELL_WEAKEN_AFTER steps)
+SWELL_CONTACT_SCALE = 0.05
+#: the global moduli the stage's settings were measured with (the PyOIF
+#: paper's RBC, kag 0.7 and kv 0.9): the cells' moduli are divided by the
+#: largest ratio of a type's kv or kag to these
+SWELL_REFERENCE = dict(kag=0.7, kv=0.9)
+SWELL_WEAKEN_AT, SWELL_WEAKEN_AFTER = 0.01, 1000
+#: steps between the checks of the volumes and surfaces
+SWELL_CHECK_EVERY = 100
 
 
 class PackingError(SeedingError):
@@ -124,7 +181,7 @@ def _confined_axes(shapes, lo, hi, box, clearance):
 def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None, boundaries=(), region=None,
                particle_types=None, particle_mass=1.0, seed=None, clearance=None, wall_clearance=None,
                rotation_axis=None, max_iterations=20000, create=True, exclusion_neighbours=True,
-               self_cell_cutoff=None):
+               self_cell_cutoff=None, deformable=True, max_swell_steps=20000):
     """Pack cells of the given types (one OifCellType or a list) to a
     haematocrit (volume fraction of the fluid inside `region`, outside
     `boundaries`) or to `counts`, each at its exact reference shape; returns
@@ -136,12 +193,19 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     extrusions from CAD layouts). region: (lo, hi) corners the cells stay
     in (default the box). clearance: least distance of a node from another
     cell's surface (default: the advised contact's offset plus a margin,
-    see the module's docstring); wall_clearance: least signed distance of a
+    see the module's docstring; a scene with stiffened contacts or light
+    nodes passes ``oif.contacts.packing_clearance(types, scale, time_step,
+    node_mass)``, so that its contacts start above their guard gap);
+    wall_clearance: least signed distance of a
     node from every boundary (default 0.25 um). rotation_axis: None (random
     orientations) or an axis about which alone the cells are turned at the
     start (e.g. discs stacked like coins in a narrow tube). seed: the same
-    seed gives the same cells. Raises PackingError, naming the haematocrit
-    reached, when the cells do not fit.
+    seed gives the same cells. deformable: where rigid cells jam, swell
+    deformable cells from a slightly smaller rigid packing (the module's
+    docstring) for at most max_swell_steps steps; create=False then
+    refuses (the placements of deformed cells are not origins and
+    rotations). Raises PackingError, naming the haematocrit reached, when
+    the cells do not fit.
     """
     from lbmd import _lbmd
     import lbmd
@@ -164,8 +228,12 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         raise TypeError(f"pack_cells: parameter 'seed' must be an integer >= 0 or None, got {seed!r}")
     if not _is_int(max_iterations) or max_iterations < 1:
         raise TypeError(f"pack_cells: parameter 'max_iterations' must be an integer >= 1, got {max_iterations!r}")
-    if not isinstance(create, (bool, np.bool_)):
-        raise TypeError(f"pack_cells: parameter 'create' must be True or False, got {create!r}")
+    for name, flag in (("create", create), ("deformable", deformable)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"pack_cells: parameter '{name}' must be True or False, got {flag!r}")
+    if not _is_int(max_swell_steps) or max_swell_steps < 1:
+        raise TypeError(f"pack_cells: parameter 'max_swell_steps' must be an integer >= 1, got "
+                        f"{max_swell_steps!r}")
     axis = _unit_axis("pack_cells", rotation_axis)
     shapes = _shapes(boundaries)
     if len(system.part):
@@ -256,45 +324,208 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     packer_periodic = periodic & ~_confined_axes(shapes, lo, hi, box, clearance)
     settings = dict(box=box.tolist(), periodic=packer_periodic.tolist(), clearance=clearance,
                     wall_clearance=wall_clearance, max_iterations=int(max_iterations), final_tolerance=0.05,
-                    start_scale=START_SCALE,
+                    start_scale=START_SCALE, stall_iterations=STALL_ITERATIONS,
+                    stall_overlap_drop=STALL_OVERLAP_DROP,
                     seed=int(seed or 0))
     if region is not None:
         settings["region"] = [lo.tolist(), hi.tolist()]
     result = packer.run(settings)
-    check = packer.check(settings)
     reached = target * result["scale"] ** 3
     report = dict(haematocrit=target, counts=list(counts), fluid_volume=v_fluid, clearance=clearance,
                   wall_clearance=wall_clearance, iterations=result["iterations"], converged=result["converged"],
-                  worst_overlap=result["worst_overlap"], worst_wall_overlap=result["worst_wall_overlap"],
-                  nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
-                  min_wall_distance=check["min_wall_distance"], pack_seconds=time.perf_counter() - t_start)
+                  rigid_converged=result["converged"], worst_overlap=result["worst_overlap"],
+                  worst_wall_overlap=result["worst_wall_overlap"], method="rigid")
+    too_dense = (f"pack_cells: {n} cells (haematocrit {target:.3f}) did not fit in {result['iterations']} "
+                 f"iterations: rigid, they reached {result['scale']:.3f} of their size (haematocrit "
+                 f"{reached:.3f}) with nodes {result['worst_overlap']:.3g} closer to other cells than the "
+                 f"clearance {clearance:.3g} and {result['worst_wall_overlap']:.3g} closer to the walls than "
+                 f"{wall_clearance:.3g}")
+    advice = ("Lower the haematocrit, enlarge the geometry, lower the clearance, align the cells "
+              "(rotation_axis) or raise max_iterations")
+    swell_scale = None
     if not result["converged"]:
-        raise PackingError(
-            f"pack_cells: {n} cells (haematocrit {target:.3f}) did not fit in {result['iterations']} iterations: "
-            f"they reached {result['scale']:.3f} of their size (haematocrit {reached:.3f}) with nodes "
-            f"{result['worst_overlap']:.3g} closer to other cells than the clearance {clearance:.3g} and "
-            f"{result['worst_wall_overlap']:.3g} closer to the walls than {wall_clearance:.3g}. Lower the "
-            f"haematocrit, enlarge the geometry, lower the clearance, align the cells (rotation_axis) or "
-            f"raise max_iterations")
+        if not result["jammed"]:
+            raise PackingError(f"{too_dense}; they were still growing when max_iterations ran out. {advice}")
+        if not deformable:
+            raise PackingError(f"{too_dense}. {advice}, or let the cells deform (deformable=True)")
+        if not create:
+            raise PackingError(f"{too_dense}; deformed cells cannot be given as placements (create=False): "
+                               f"pack with create=True")
+        # settle the rigid cells a little smaller than where they jammed
+        for shrink in SWELL_START:
+            swell_scale = shrink * result["scale"]
+            if swell_scale < SWELL_LEAST_SCALE:
+                break
+            # every node at least the clearance from the others (no tolerance): the
+            # deformable stage's contacts start within their range
+            settled = packer.run(dict(settings, start_scale=swell_scale, final_scale=swell_scale,
+                                      max_iterations=500, stall_iterations=0, final_tolerance=0.0))
+            report["iterations"] += settled["iterations"]
+            if settled["converged"]:
+                break
+        else:
+            swell_scale = 0.0
+        if swell_scale < SWELL_LEAST_SCALE:
+            raise PackingError(f"{too_dense}; too dense to swell deformable cells from (their volume would have "
+                               f"to grow by more than {1 / SWELL_LEAST_SCALE ** 3 - 1:.0%}). {advice}")
+        report.update(method="rigid+deformable", rigid_scale=swell_scale, rigid_haematocrit=target * swell_scale ** 3)
     centres = packer.centres()
     rotations = packer.rotations()
     placements = []
     for b, ti in enumerate(order):
         rot = rotations[b]
         placements.append((ti, centres[b] - rot @ centroids[ti], rotation_to_angles(rot)))
+    if swell_scale is None:
+        check = packer.check(settings)
+        report.update(nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
+                      min_wall_distance=check["min_wall_distance"])
+    else:
+        swollen = _swell(system, types, order, centres, rotations, swell_scale, shapes, lo, hi, clearance,
+                         wall_clearance, int(max_swell_steps), report)
+    report["pack_seconds"] = time.perf_counter() - t_start
     out = PackedCells()
     out.report = report
     if not create:
         out.extend(placements)
         return out
     try:
-        for ti, origin, angles in placements:
+        for b, (ti, origin, angles) in enumerate(placements):
             out.append(OifCell(cell_type=types[ti], particle_type=particle_types[ti], origin=origin, rotate=angles,
                                particle_mass=particle_mass, exclusion_neighbours=exclusion_neighbours,
                                self_cell_cutoff=self_cell_cutoff, check_overlaps=False))
+            if swell_scale is not None:
+                out[-1].particles.pos = swollen[b]
     except BaseException:
         for c in out:
             c._discard()
         raise
+    if swell_scale is not None:
+        # the exact check of the deformed meshes
+        nodes = np.concatenate(swollen)
+        first = np.concatenate([[0], np.cumsum([len(x) for x in swollen])]).astype(int).tolist()
+        check = _lbmd.check_meshes(nodes, first, [int(ti) for ti in order],
+                                   [mesh_io.outward(t.mesh._topo.triangles) for t in types],
+                                   [sh._core for sh in shapes], settings, clearance + 1.0)
+        report.update(nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
+                      min_wall_distance=check["min_wall_distance"])
     report["seconds"] = time.perf_counter() - t_start
     return out
+
+
+def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clearance, wall_clearance, max_steps,
+           report):
+    """The deformable stage (the module's docstring): the rigid cells at
+    `scale` made deformable in a scratch System and swollen to their
+    reference volume and surface; returns each cell's node positions
+    (unfolded) and adds its figures to `report`."""
+    import warnings
+    import lbmd
+    from lbmd import shapes as lbshapes
+    from lbmd.settings_check import membrane_trial
+    from .contacts import contact_offset, set_contacts
+    from .oif_classes import OifCell
+    t0 = time.perf_counter()
+    box = np.asarray(system.box_l, dtype=float)
+    periodic = np.asarray(system.periodicity, dtype=bool)
+    scratch = lbmd.System(box_l=box.tolist(), periodicity=periodic.tolist())
+    scratch.__dict__["_settings_checked"] = True  # a scratch run: nothing to check
+    scratch.cell_drift_tolerance = 1e9  # the stage judges the volumes and surfaces itself
+    # the moduli normalised to the published RBC's global moduli (a scene
+    # that stiffens its membranes to keep the capillary number at a faster
+    # flow, as the flagship does 27x, swells as the published cells do):
+    # scaling every modulus and the contacts alike leaves the shapes the
+    # cells take unchanged and keeps the stage's time step and contacts
+    # in the range measured
+    stiffness = max(max(t.kv / SWELL_REFERENCE["kv"], t.kag / SWELL_REFERENCE["kag"]) for t in types) or 1.0
+    copies = [t.copy_to(scratch, kvisc=0.0,  # the friction damps; no dashpots needed
+                        **{k: getattr(t, k) / stiffness for k in ("ks", "kslin", "kb", "kal", "kag", "kv")})
+              for t in types]
+    # the time step: halved while a cell type's membrane is unstable at it
+    dt = SWELL_TIME_STEP
+    for t, copy in zip(types, copies):
+        for _ in range(6):
+            if membrane_trial(copy, dt, SWELL_MASS, SWELL_FRICTION * SWELL_FRICTION_RETRY[0]) == "stable":
+                break
+            dt *= 0.5
+        else:
+            raise PackingError(f"pack_cells: the deformable stage found no stable time step down to {dt:.3g} "
+                               f"for a cell type's moduli (ks {t.ks:g}, kb {t.kb:g}, kv {t.kv:g}); "
+                               f"deformable=False packs rigid cells only")
+    scratch.time_step = dt
+    scratch.cell_system.skin = 0.3
+    k = len(types)
+    wall_type = k
+    cells = []
+    for b, ti in enumerate(order):
+        centroid = types[ti].mesh._nodes.mean(axis=0)
+        cell = OifCell(cell_type=copies[ti], particle_type=int(ti), origin=centres[b] - rotations[b] @ centroid,
+                       rotate=rotation_to_angles(rotations[b]), particle_mass=SWELL_MASS, check_overlaps=False)
+        x = cell.particles.pos
+        cell.particles.pos = centres[b] + (x - centres[b]) * scale
+        cells.append(cell)
+    walls = list(shapes)
+    for d in range(3):  # the region's faces and the box faces of non-periodic axes
+        if not periodic[d] or hi[d] - lo[d] < box[d]:
+            normal = np.eye(3)[d]
+            walls += [lbshapes.Wall(normal=normal.tolist(), dist=float(lo[d])),
+                      lbshapes.Wall(normal=(-normal).tolist(), dist=-float(hi[d]))]
+    for w in walls:
+        scratch.constraints.add(shape=w, particle_type=wall_type)
+    # the cells' contact holds their nodes half the packing's margin beyond
+    # the advised offset (so that a run's contacts start above their guard
+    # gap, oif.contacts.packing_clearance), the walls' contact half the
+    # wall clearance off the walls
+    offset = contact_offset(types)
+    cell_offset = offset + 0.5 * (clearance - offset)
+
+    def contacts(scale):
+        contact = set_contacts(scratch, copies, particle_types=list(range(k)), wall_types=[wall_type], scale=scale)
+        for ti in range(k):
+            for tj in range(ti, k):
+                scratch.non_bonded_inter[ti, tj].hard_contact.set_params(**dict(contact["cell"], offset=cell_offset))
+            scratch.non_bonded_inter[ti, wall_type].hard_contact.set_params(
+                **dict(contact["wall"], offset=0.5 * wall_clearance))
+    start = [np.array(c.particles.pos) for c in cells]
+    v0 = np.array([types[ti].volume0 for ti in order])
+    a0 = np.array([types[ti].surface0 for ti in order])
+    total = 0
+    for retry in SWELL_FRICTION_RETRY:
+        friction = SWELL_FRICTION * retry
+        scratch.thermostat.set_langevin(kT=0.0, gamma=friction, seed=1)
+        for c, x in zip(cells, start):
+            c.particles.pos = x
+            c.particles.v = np.zeros_like(x)
+        contacts(1.0)
+        weak = False
+        steps = 0
+        try:
+            while True:
+                dv = np.array([c.volume() for c in cells]) / v0 - 1.0
+                da = np.array([c.surface() for c in cells]) / a0 - 1.0
+                worst = max(np.abs(dv).max(), np.abs(da).max())
+                if weak and worst <= SWELL_TOLERANCE:
+                    break
+                if not weak and (np.abs(dv).mean() <= SWELL_WEAKEN_AT or steps >= SWELL_WEAKEN_AFTER * retry):
+                    contacts(SWELL_CONTACT_SCALE)
+                    weak = True
+                if steps >= max_steps * retry:
+                    raise PackingError(f"pack_cells: the deformable cells did not swell to their reference "
+                                       f"volume and surface in {steps} steps (worst {np.abs(dv).max():.2%} and "
+                                       f"{np.abs(da).max():.2%} off, tolerance {SWELL_TOLERANCE:.1%}); the "
+                                       f"haematocrit is too high for this geometry, or raise max_swell_steps")
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    scratch.integrator.run(SWELL_CHECK_EVERY)
+                steps += SWELL_CHECK_EVERY
+            break
+        except lbmd.SimulationInstability as err:
+            total += steps
+            if retry == SWELL_FRICTION_RETRY[-1]:
+                raise PackingError(f"pack_cells: the deformable stage stopped at friction {friction:g} after "
+                                   f"{steps} steps: {err}") from err
+    total += steps
+    dv, da = np.abs(dv).max(), np.abs(da).max()
+    report.update(converged=True, swell_steps=total, swell_time_step=dt, swell_friction=friction,
+                  swell_moduli_divided_by=stiffness, swell_seconds=time.perf_counter() - t0,
+                  worst_volume_deviation=float(dv), worst_surface_deviation=float(da))
+    return [np.array(c.particles.pos) for c in cells]

@@ -287,8 +287,6 @@ def membrane_trial(cell_type, dt, mass, friction, steps=None):
     noise of TRIAL_NOISE of its mean edge. Unstable: a SimulationInstability,
     non-finite positions, or the elastic energy grown tenfold. Remembered
     per (mesh, moduli, dt, mass, friction)."""
-    import os
-    import tempfile
     import oif
     from . import System, SimulationInstability
     steps = steps or TRIAL_STEPS
@@ -306,14 +304,9 @@ def membrane_trial(cell_type, dt, mass, friction, steps=None):
     s.__dict__["_settings_checked"] = True  # the trial's own first run checks nothing
     s.time_step = dt
     s.cell_system.skin = 0.4
-    with tempfile.TemporaryDirectory() as tmp:
-        nf, tf = os.path.join(tmp, "nodes.dat"), os.path.join(tmp, "triangles.dat")
-        np.savetxt(nf, nodes, fmt="%.17g")
-        np.savetxt(tf, cell_type.mesh._topo.triangles, fmt="%d")
-        ct = oif.OifCellType(nf, tf, system=s, ks=cell_type.ks, kslin=cell_type.kslin, kb=cell_type.kb,
-                             kal=cell_type.kal, kag=cell_type.kag, kv=cell_type.kv, kvisc=cell_type.kvisc,
-                             normal=cell_type.normal, check_orientation=False)
-    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[0.5 * side] * 3, particle_mass=mass,
+    ct = cell_type.copy_to(s)
+    centroid = np.asarray(cell_type.mesh._nodes, dtype=float).mean(axis=0)
+    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=np.full(3, 0.5 * side) - centroid, particle_mass=mass,
                        check_overlaps=False)
     x = cell.particles.pos
     c = x.mean(axis=0)
