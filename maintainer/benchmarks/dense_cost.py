@@ -2,7 +2,7 @@
 dilute and a dense tube haematocrit, with the advised hard_contact, the
 published moduli (rbc374) and the coupling; prints the phases and writes CSV.
 
-    pyoif maintainer/benchmarks/dense_cost.py [--diameter 20] [--length 60] [--haematocrits 0.1 0.4] [--steps 1000]
+    pyoif maintainer/benchmarks/dense_cost.py [--diameter 20] [--length 60] [--haematocrits 0.1 0.45] [--steps 1000]
 
 The tube: a cylinder along x, periodic along it, a body force driving
 Poiseuille flow (centre speed 5 mm/s), the cells packed by
@@ -55,7 +55,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--diameter", type=float, default=20.0)
     ap.add_argument("--length", type=float, default=60.0)
-    ap.add_argument("--haematocrits", type=float, nargs="+", default=[0.1, 0.4])
+    ap.add_argument("--haematocrits", type=float, nargs="+", default=[0.1, 0.45])
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--csv", default="dense_cost.csv")
     a = ap.parse_args()

@@ -49,7 +49,7 @@ def geometry(name):
         return lbmd.System(box_l=[27.0, 27.0, 27.0]), [], None
     if name.startswith("tube"):
         diameter = float(name[4:])
-        return tube(diameter, {10.0: 4.0, 20.0: 4.0, 40.0: 2.0, 50.0: 1.6}.get(diameter, 2.0))
+        return tube(diameter, {10.0: 4.4, 20.0: 4.0, 40.0: 2.0, 50.0: 1.6}.get(diameter, 2.0))
     if name == "channel":  # 18 um between two walls, periodic in the plane
         s = lbmd.System(box_l=[36.0, 36.0, 20.0], periodicity=[True, True, False])
         return s, [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-19.0)], None

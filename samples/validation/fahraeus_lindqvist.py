@@ -288,8 +288,10 @@ def run_tube(diameter, ca=10.0, hd_target=0.25, ht=None, length_ratio=4.0, strai
     node_mass = 1.0 if node_mass_ratio is None else gamma * TIME_STEP / node_mass_ratio
     cells = None
     if packing == "pack":
+        clearance = oif.contacts.packing_clearance(ct, scale=max(1.0, ca / 2.0), time_step=TIME_STEP,
+                                                   node_mass=node_mass)  # the contacts' scale below
         cells = list(oif.pack_cells(system, ct, counts=n_cells, boundaries=[tube], particle_types=[CELL_TYPE],
-                                    particle_mass=node_mass, seed=seed))
+                                    particle_mass=node_mass, seed=seed, clearance=clearance))
     for attempt in range(20 if diameter < 12.0 and cells is None else 0):  # random placement in a narrow tube may need another seed
         try:
             cells = oif.seed_cells(system, ct, counts=n_cells, boundaries=[tube], particle_types=[CELL_TYPE],
