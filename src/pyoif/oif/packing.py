@@ -71,7 +71,7 @@ START_SCALE = 0.5
 STALL_ITERATIONS, STALL_OVERLAP_DROP = 1000, 0.05
 #: the sizes, relative to where the rigid cells jammed, tried in turn for
 #: the clean rigid packing the deformable stage starts from
-SWELL_START = (0.99, 0.98, 0.96, 0.94, 0.92, 0.9)
+SWELL_START = (0.99, 0.98, 0.96, 0.94, 0.92, 0.9, 0.87, 0.84)
 #: below this rigid size the cells are too dense to swell (their volume
 #: would have to double): PackingError
 SWELL_LEAST_SCALE = 0.8
@@ -356,10 +356,10 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
             swell_scale = shrink * result["scale"]
             if swell_scale < SWELL_LEAST_SCALE:
                 break
-            # every node at least the clearance from the others (no tolerance): the
+            # every node at least 0.99 of the clearance from the others: the
             # deformable stage's contacts start within their range
             settled = packer.run(dict(settings, start_scale=swell_scale, final_scale=swell_scale,
-                                      max_iterations=500, stall_iterations=0, final_tolerance=0.0))
+                                      max_iterations=1000, stall_iterations=0, final_tolerance=0.01))
             report["iterations"] += settled["iterations"]
             if settled["converged"]:
                 break
