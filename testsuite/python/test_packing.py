@@ -180,6 +180,32 @@ class TestPackCells(unittest.TestCase):
         for a, b in zip(cells, again):
             np.testing.assert_array_equal(a.mesh.positions(), b.mesh.positions())
 
+    def test_two_types_between_walls_at_045(self):
+        """Red cells and small spheres (85/15 % of the cell volume) between
+        two walls 10 um apart at 0.45: the rigid stage jams and the
+        deformable one swells both types to their reference volume and
+        surface within 0.5 %, no node inside another cell or beyond a
+        wall."""
+        s = lbmd.System(box_l=[20.0, 20.0, 12.0], periodicity=[True, True, False])
+        walls = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-11.0)]
+        red = rbc(s)
+        small = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(1.5,) * 3, ks=0.05, kb=0.1,
+                                kal=0.01, kag=0.7, kv=0.9, normal=True)
+        cells = oif.pack_cells(s, [red, small], haematocrit=0.45, fractions=[0.85, 0.15], boundaries=walls,
+                               particle_types=[0, 1], seed=2)
+        r = cells.report
+        self.assertEqual(r["method"], "rigid+deformable")
+        self.assertGreaterEqual(r["haematocrit"], 0.445)
+        self.assertEqual([sum(c.cell_type is t for c in cells) for t in (red, small)], r["counts"])
+        self.assertGreater(min(r["counts"]), 10)
+        for c in cells:
+            self.assertLess(abs(c.volume() / c.cell_type.volume0 - 1.0), 0.005)
+            self.assertLess(abs(c.surface() / c.cell_type.surface0 - 1.0), 0.005)
+        self.assertEqual(nodes_inside_other_cells(cells, np.array(s.box_l), np.array([True, True, False])), 0)
+        z = np.concatenate([c.mesh.positions()[:, 2] for c in cells])
+        self.assertGreater(z.min(), 1.0 + 0.5 * r["wall_clearance"])
+        self.assertLess(z.max(), 11.0 - 0.5 * r["wall_clearance"])
+
     def test_mesh_check_of_two_overlapping_cells(self):
         """The deformable stage's exact check (check_meshes) against a
         brute-force count: two spheres moved 1.5 um into each other."""
