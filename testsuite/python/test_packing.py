@@ -141,7 +141,7 @@ class TestPackCells(unittest.TestCase):
             return s, ct, oif.pack_cells(s, ct, haematocrit=0.45, boundaries=[tube], seed=4, **kw)
 
         with self.assertRaisesRegex(oif.PackingError, r"deformable=True"):
-            pack(deformable=False)
+            pack(deformable=False, max_iterations=3000)
         s, ct, cells = pack()
         r = cells.report
         self.assertEqual(r["method"], "rigid+deformable")

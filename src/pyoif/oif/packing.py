@@ -30,16 +30,17 @@ above a haematocrit of about 0.35: the wall layer and the contacts'
 clearance leave no room for rigid discs), the deformable stage takes over
 (``deformable=True``, the default): the rigid packing is settled a little
 smaller than where it jammed, the cells are made there as deformable OIF
-cells with their reference moduli in a scratch System of their own (no
+cells with their own moduli (divided alike, see _swell) in a scratch System of their own (no
 fluid, no thermal noise; a friction damps them) and swell to their
 reference volume and surface under the advised contact (hard_contact,
-which no squeeze crosses) at a tenth of its strength and under the walls'
+which no squeeze crosses) — at the advised strength while they swell
+fast, at a twentieth of it for the last per cent — and under the walls'
 contact, until every cell's volume and surface are within
 SWELL_TOLERANCE of the reference. The cells end deformed as blood cells
 are at that haematocrit, at their reference volume and surface, and
 carry the elastic stress of that shape into the run. The rigid stage does
 most of the work first, at no membrane cost; the swelling then only has
-to find room for the last few per cent of the cells' volume. Why a tenth of the contact's strength: at the full strength
+to find room for the last few per cent of the cells' volume. Why a twentieth of the contact's strength at the end: at the full strength
 the contacts between all the cells at 0.45 keep the most squeezed cells
 1-2 % below their reference surface (measured, D 20 um tube); weaker, the
 gaps are smaller and the cells reach their reference, still with every
@@ -90,7 +91,7 @@ SWELL_FRICTION_RETRY = (1.0, 4.0, 16.0)
 #: the contact's force scale in the deformable stage, relative to the
 #: advised one: the advised contact while the cells swell fast (a weak one
 #: is too stiff for the time step under that push: an overdamped contact
-#: holds a push up to about sqrt(2 a cutoff friction / dt)), a tenth of it
+#: holds a push up to about sqrt(2 a cutoff friction / dt)), a twentieth of it
 #: from when the mean volume deficit is below SWELL_WEAKEN_AT (or after
 #: SWELL_WEAKEN_AFTER steps)
 SWELL_CONTACT_SCALE = 0.05
@@ -195,16 +196,20 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     cell's surface (default: the advised contact's offset plus a margin,
     see the module's docstring; a scene with stiffened contacts or light
     nodes passes ``oif.contacts.packing_clearance(types, scale, time_step,
-    node_mass)``, so that its contacts start above their guard gap);
-    wall_clearance: least signed distance of a
-    node from every boundary (default 0.25 um). rotation_axis: None (random
+    node_mass)``, so that its contacts start above their guard gap;
+    deformed cells keep half the margin beyond the contact's offset);
+    wall_clearance: least signed distance of a node from every boundary
+    (default 0.25 um; deformed cells keep half of it). rotation_axis: None (random
     orientations) or an axis about which alone the cells are turned at the
     start (e.g. discs stacked like coins in a narrow tube). seed: the same
     seed gives the same cells. deformable: where rigid cells jam, swell
     deformable cells from a slightly smaller rigid packing (the module's
-    docstring) for at most max_swell_steps steps; create=False then
-    refuses (the placements of deformed cells are not origins and
-    rotations). Raises PackingError, naming the haematocrit reached, when
+    docstring) for at most max_swell_steps steps (4x and 16x that on a
+    retry at a higher friction after a contact overrun); create=False
+    then refuses (the placements of deformed cells are not origins and
+    rotations; a swollen cell's origin and rotation stay those of its
+    rigid placement). Under mpirun with seed None, rank 0's seed is used
+    on every rank. Raises PackingError, naming the haematocrit reached, when
     the cells do not fit.
     """
     from lbmd import _lbmd
@@ -287,6 +292,9 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     # shrunken cells about one centre push each other symmetrically and
     # would not separate; larger cells first, types interleaved
     # reproducibly by the seed
+    if seed is None and lbmd.size > 1:
+        # every rank must add the same cells: one seed, drawn on rank 0
+        seed = lbmd.comm.bcast(int(np.random.SeedSequence().entropy % (2 ** 63)), root=0)
     rng = np.random.default_rng(seed)
     order = sorted((i for i in range(k) for _ in range(counts[i])), key=lambda i: -vols[i])
     centres = np.empty((n, 3))
@@ -324,7 +332,9 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     packer_periodic = periodic & ~_confined_axes(shapes, lo, hi, box, clearance)
     settings = dict(box=box.tolist(), periodic=packer_periodic.tolist(), clearance=clearance,
                     wall_clearance=wall_clearance, max_iterations=int(max_iterations), final_tolerance=0.05,
-                    start_scale=START_SCALE, stall_iterations=STALL_ITERATIONS,
+                    start_scale=START_SCALE,
+                    # stop a jammed rigid packing early only where the deformable stage takes over
+                    stall_iterations=STALL_ITERATIONS if deformable and create else 0,
                     stall_overlap_drop=STALL_OVERLAP_DROP,
                     seed=int(seed or 0))
     if region is not None:
@@ -344,10 +354,10 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
               "(rotation_axis) or raise max_iterations")
     swell_scale = None
     if not result["converged"]:
-        if not result["jammed"]:
-            raise PackingError(f"{too_dense}; they were still growing when max_iterations ran out. {advice}")
         if not deformable:
             raise PackingError(f"{too_dense}. {advice}, or let the cells deform (deformable=True)")
+        if not result["jammed"]:
+            raise PackingError(f"{too_dense}; they were still growing when max_iterations ran out. {advice}")
         if not create:
             raise PackingError(f"{too_dense}; deformed cells cannot be given as placements (create=False): "
                                f"pack with create=True")
@@ -364,7 +374,8 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
             if settled["converged"]:
                 break
         else:
-            swell_scale = 0.0
+            raise PackingError(f"{too_dense}; no smaller rigid packing to swell deformable cells from settled "
+                               f"(down to {swell_scale:.3f} of their size). {advice}")
         if swell_scale < SWELL_LEAST_SCALE:
             raise PackingError(f"{too_dense}; too dense to swell deformable cells from (their volume would have "
                                f"to grow by more than {1 / SWELL_LEAST_SCALE ** 3 - 1:.0%}). {advice}")
@@ -381,7 +392,19 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
                       min_wall_distance=check["min_wall_distance"])
     else:
         swollen = _swell(system, types, order, centres, rotations, swell_scale, shapes, lo, hi, clearance,
-                         wall_clearance, int(max_swell_steps), report)
+                         wall_clearance, int(max_swell_steps), report, packer_periodic)
+        # the exact check of the deformed meshes, before any cell is made
+        nodes = np.concatenate(swollen)
+        first = np.concatenate([[0], np.cumsum([len(x) for x in swollen])]).astype(int).tolist()
+        check = _lbmd.check_meshes(nodes, first, [int(ti) for ti in order],
+                                   [mesh_io.outward(t.mesh._topo.triangles) for t in types],
+                                   [sh._core for sh in shapes], settings, clearance + 1.0)
+        report.update(nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
+                      min_wall_distance=check["min_wall_distance"])
+        if check["nodes_inside_cells"] or check["min_wall_distance"] < 0.0:
+            raise PackingError(f"pack_cells: the swollen cells failed the exact check: "
+                               f"{check['nodes_inside_cells']} nodes inside other cells, closest node "
+                               f"{check['min_wall_distance']:.3g} from a wall; please report this")
     report["pack_seconds"] = time.perf_counter() - t_start
     out = PackedCells()
     out.report = report
@@ -399,21 +422,12 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         for c in out:
             c._discard()
         raise
-    if swell_scale is not None:
-        # the exact check of the deformed meshes
-        nodes = np.concatenate(swollen)
-        first = np.concatenate([[0], np.cumsum([len(x) for x in swollen])]).astype(int).tolist()
-        check = _lbmd.check_meshes(nodes, first, [int(ti) for ti in order],
-                                   [mesh_io.outward(t.mesh._topo.triangles) for t in types],
-                                   [sh._core for sh in shapes], settings, clearance + 1.0)
-        report.update(nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
-                      min_wall_distance=check["min_wall_distance"])
     report["seconds"] = time.perf_counter() - t_start
     return out
 
 
 def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clearance, wall_clearance, max_steps,
-           report):
+           report, packer_periodic):
     """The deformable stage (the module's docstring): the rigid cells at
     `scale` made deformable in a scratch System and swollen to their
     reference volume and surface; returns each cell's node positions
@@ -422,7 +436,7 @@ def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clea
     import lbmd
     from lbmd import shapes as lbshapes
     from lbmd.settings_check import membrane_trial
-    from .contacts import contact_offset, set_contacts
+    from .contacts import contact_offset, contact_settings, guard_gap, set_contacts
     from .oif_classes import OifCell
     t0 = time.perf_counter()
     box = np.asarray(system.box_l, dtype=float)
@@ -430,27 +444,30 @@ def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clea
     scratch = lbmd.System(box_l=box.tolist(), periodicity=periodic.tolist())
     scratch.__dict__["_settings_checked"] = True  # a scratch run: nothing to check
     scratch.cell_drift_tolerance = 1e9  # the stage judges the volumes and surfaces itself
-    # the moduli normalised to the published RBC's global moduli (a scene
+    # the moduli normalised to the published RBC's global moduli by the
+    # least stiff type's ratio (a scene
     # that stiffens its membranes to keep the capillary number at a faster
     # flow, as the flagship does 27x, swells as the published cells do):
     # scaling every modulus and the contacts alike leaves the shapes the
     # cells take unchanged and keeps the stage's time step and contacts
     # in the range measured
-    stiffness = max(max(t.kv / SWELL_REFERENCE["kv"], t.kag / SWELL_REFERENCE["kag"]) for t in types) or 1.0
+    ratios = [max(t.kv / SWELL_REFERENCE["kv"], t.kag / SWELL_REFERENCE["kag"]) for t in types]
+    stiffness = min((r for r in ratios if r > 0), default=1.0)  # a stiffer type keeps its ratio to the others
     copies = [t.copy_to(scratch, kvisc=0.0,  # the friction damps; no dashpots needed
                         **{k: getattr(t, k) / stiffness for k in ("ks", "kslin", "kb", "kal", "kag", "kv")})
               for t in types]
     # the time step: halved while a cell type's membrane is unstable at it
     dt = SWELL_TIME_STEP
     for t, copy in zip(types, copies):
-        for _ in range(6):
+        for attempt in range(6):
+            if attempt:
+                dt *= 0.5
             if membrane_trial(copy, dt, SWELL_MASS, SWELL_FRICTION * SWELL_FRICTION_RETRY[0]) == "stable":
                 break
-            dt *= 0.5
         else:
             raise PackingError(f"pack_cells: the deformable stage found no stable time step down to {dt:.3g} "
-                               f"for a cell type's moduli (ks {t.ks:g}, kb {t.kb:g}, kv {t.kv:g}); "
-                               f"deformable=False packs rigid cells only")
+                               f"for a cell type's moduli (divided by {stiffness:.3g}: ks {copy.ks:g}, kb "
+                               f"{copy.kb:g}, kv {copy.kv:g}); deformable=False packs rigid cells only")
     scratch.time_step = dt
     scratch.cell_system.skin = 0.3
     k = len(types)
@@ -466,9 +483,13 @@ def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clea
     walls = list(shapes)
     for d in range(3):  # the region's faces and the box faces of non-periodic axes
         if not periodic[d] or hi[d] - lo[d] < box[d]:
+            # the rigid packer keeps the wall clearance from these faces on
+            # the axes it packs as closed, none on the periodic ones: there
+            # the wall stands the wall clearance beyond the face
+            out = 0.0 if not packer_periodic[d] else wall_clearance
             normal = np.eye(3)[d]
-            walls += [lbshapes.Wall(normal=normal.tolist(), dist=float(lo[d])),
-                      lbshapes.Wall(normal=(-normal).tolist(), dist=-float(hi[d]))]
+            walls += [lbshapes.Wall(normal=normal.tolist(), dist=float(lo[d]) - out),
+                      lbshapes.Wall(normal=(-normal).tolist(), dist=-float(hi[d]) - out)]
     for w in walls:
         scratch.constraints.add(shape=w, particle_type=wall_type)
     # the cells' contact holds their nodes half the packing's margin beyond
@@ -477,6 +498,14 @@ def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clea
     # wall clearance off the walls
     offset = contact_offset(types)
     cell_offset = offset + 0.5 * (clearance - offset)
+    # the rigid settle leaves 0.99 of the clearance: the first steps need
+    # the gaps to the stage's contacts above twice their guard gap
+    guard = guard_gap(contact_settings(types)["cell"]["a"], dt, SWELL_MASS)
+    if 0.99 * clearance - cell_offset < 2.0 * guard or 0.5 * wall_clearance - 0.01 * clearance < 2.0 * guard:
+        raise PackingError(f"pack_cells: the deformable stage needs parameter 'clearance' ({clearance:.3g}) at "
+                           f"least {(0.5 * offset + 2.0 * guard) / 0.49:.3g} (the contact's offset {offset:.3g} plus a "
+                           f"margin) and 'wall_clearance' ({wall_clearance:.3g}) at least "
+                           f"{2.0 * (2.0 * guard + 0.01 * clearance):.3g}")
 
     def contacts(scale):
         contact = set_contacts(scratch, copies, particle_types=list(range(k)), wall_types=[wall_type], scale=scale)
