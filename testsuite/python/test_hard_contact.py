@@ -82,6 +82,7 @@ class TestHardContact(unittest.TestCase):
             s.integrator.run(2000)
         err = cm.exception
         self.assertEqual(err.cause, "contact_overrun")
+        self.assertIn("packing_clearance", str(err))  # the way out for a scene packed too close
         self.assertIn("particle 1", str(err))
         self.assertIn("particle 0", str(err))
         self.assertLess(err.value, s.non_bonded_inter[0, 0].hard_contact.get_params()["guard_gap"] + 1e-15)

@@ -84,7 +84,9 @@ struct HardContact {
             format_number(p.guard_gap) +
             " at which the contact's stiffness outruns the time step. The cells are pushed "
             "harder than the contact can hold at this time step: lower the time step or the "
-            "driving force, or raise a")
+            "driving force, or raise a. If this is a run's first step, the cells started that "
+            "close: pack them further apart (oif.pack_cells with clearance="
+            "oif.contacts.packing_clearance(cell_types, scale, time_step, node_mass))")
         .with_value(h);
   }
 
