@@ -5,9 +5,8 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config git clang-format
-  libeigen3-dev libboost-dev pybind11-dev
+  libeigen3-dev pybind11-dev
   libopenmpi-dev openmpi-bin
-  libhdf5-dev
   libgtest-dev googletest
   python3 python3-dev python3-numpy python3-mpi4py python3-h5py
   python3-vtk9 python3-matplotlib python3-meshio python3-pybind11 python3-scipy python3-tqdm

@@ -485,8 +485,6 @@ class TestOifCell(unittest.TestCase):
         cell = oif.OifCell(cell_type=self.ct, particle_type=0, origin=[10, 15, 15], exclusion_neighbours=10**7)
         self.assertEqual(cell.n_exclusions, 374 * 373 // 2)
 
-    @unittest.skipUnless(hasattr(lbmd.shapes, "Rhomboid") and hasattr(lbmd.shapes, "Cylinder"),
-                         "lbmd.shapes.Rhomboid/Cylinder not built yet")
     def test_shape_vtk(self):
         from lbmd import shapes
         rh = shapes.Rhomboid(corner=[1, 2, 3], a=[4, 0, 0], b=[0, 5, 0], c=[0, 0, 6], direction=1)

@@ -17,7 +17,6 @@ WALL = 1.0
 R = 3.0
 
 
-@unittest.skipUnless(hasattr(lb.LBFluid, "_activate"), "lattice-Boltzmann fluid not built yet")
 class TestCellInPoiseuilleFlow(unittest.TestCase):
 
     def test_moves_with_flow_and_migrates(self):

@@ -11,7 +11,6 @@ import tempfile
 import textwrap
 import unittest
 
-import lbmd
 
 from testsuite_data import TEST_MESHES
 
@@ -158,8 +157,6 @@ class TestPort(unittest.TestCase):
         stdout, _ = self.run_script(RELAXATION_SCRIPT)
         self.assertIn("OK", stdout)
 
-    @unittest.skipUnless(hasattr(lbmd.lb.LBFluid, "_activate") and hasattr(lbmd.shapes, "Rhomboid"),
-                         "LB fluid or Rhomboid/Cylinder shapes not built yet")
     def test_channel_script(self):
         stdout, files = self.run_script(CHANNEL_SCRIPT)
         self.assertIn("Simulation completed.", stdout)
