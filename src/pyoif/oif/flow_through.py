@@ -119,7 +119,7 @@ class CellFlow:
     def _with_the_flow(self, cell):
         """A new cell's nodes start with the fluid's velocity where they are
         (a cell at rest dropped into a fast flow is jerked by the coupling)."""
-        fluid = self.system._lb_fluid()
+        fluid = self.system.lb_fluid
         if fluid is None:
             return
         parts = cell.mesh._live_parts()

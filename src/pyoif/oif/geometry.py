@@ -7,7 +7,7 @@ corners, and its size is the one of PyOIF's ``angle_btw_triangles``
 (pi for a flat pair, in (0, 2 pi)).
 """
 import numpy as np
-from lbmd import _lbmd
+from lbmd.interactions import membrane_angles
 
 from .mesh_io import signed_volume
 
@@ -39,8 +39,7 @@ def dihedral_angles(nodes, angles):
     (P1 - P2) x (P3 - P2), in [0, 2 pi). Computed by the engine's membrane
     component, the function its bending force (eq. 4) measures angles with, so
     that a relaxed mesh is exactly at its reference angles."""
-    return _lbmd.membrane_angles(np.ascontiguousarray(nodes, dtype=float),
-                                 np.ascontiguousarray(angles, dtype=np.int32))
+    return membrane_angles(nodes, angles)
 
 
 def edge_lengths(nodes, edges):

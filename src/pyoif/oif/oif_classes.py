@@ -14,11 +14,11 @@ pointing into the cell; the engine's triangle bonds get them outward.
 """
 import itertools
 import os
-import weakref
 
 import numpy as np
 
 import lbmd
+from lbmd import cell_registry
 from lbmd.file_output import replace_atomically
 from lbmd.particle_data import ParticleHandle
 from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, real_number as _real_number, vector3 as _vector3
@@ -26,6 +26,7 @@ from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int,
 from . import geometry as geo
 from . import mesh_io
 from . import vtk as _vtk
+from .settings_check import cell_settings
 from .oif_utils import (small_epsilon, custom_str, vec_distance, get_triangle_normal, area_triangle,
                         angle_btw_triangles, angle_btw_vectors)
 
@@ -46,21 +47,11 @@ def _check_system(owner, system):
         raise TypeError(f"{owner}: parameter 'system' must be an lbmd.System, got {type(system).__name__}")
 
 
-#: every complete OifCell (weakly held), so that seeding can avoid the cells already there
-_CELLS = weakref.WeakSet()
-
-
 def live_cells(system):
-    """The OifCells of `system` whose particles are all still theirs."""
-    out = []
-    for c in list(_CELLS):
-        if c.system is system:
-            try:
-                c.mesh._live_parts()
-            except RuntimeError:
-                continue
-            out.append(c)
-    return sorted(out, key=lambda c: c.cell_id)  # reproducible order
+    """The OifCells of `system` whose particles are all still theirs, by
+    cell_id: every complete OifCell registers with lbmd.cell_registry, so
+    that the engine (system.cells) and seeding see the cells already there."""
+    return [c for c in system.cells if isinstance(c, OifCell)]
 
 
 
@@ -868,14 +859,20 @@ class OifCellType:
         for inter in (self.local_force_interaction, self.global_force_interaction):
             if inter is None:
                 continue
-            terms = self.system._core.oif_energies(self.system.bonded_inter._id_of(inter),
-                                                   -1 if cell_id is None else int(cell_id))
+            terms = self.system.analysis.oif_energies(inter, -1 if cell_id is None else int(cell_id))
             for term, (mol_ids, values) in terms.items():
                 for mol, value in zip(np.asarray(mol_ids).tolist(), np.asarray(values).tolist()):
                     out.setdefault(int(mol), dict.fromkeys(self.ENERGY_TERMS, 0.0))[term] = float(value)
         for energies in out.values():
             energies["total"] = sum(energies[t] for t in self.ENERGY_TERMS)
         return out
+
+    def reference_diameter(self):
+        """Largest distance between two nodes of the relaxed mesh (computed
+        once)."""
+        if "_reference_diameter" not in self.__dict__:
+            self.__dict__["_reference_diameter"] = geo.max_pair_distance(self.mesh.positions())
+        return self.__dict__["_reference_diameter"]
 
     def suggest_LBgamma(self, visc=None, dens=None):
         """PyOIF's empirical fluid-coupling friction for this mesh density,
@@ -991,12 +988,32 @@ class OifCell:
             self._discard()  # no half-built cell stays behind
             raise
         system.max_oif_objects = cell_id + 1
-        _CELLS.add(self)
+        cell_registry.register(self)
 
     def __setstate__(self, state):
         # a cell loaded from a checkpoint (lbmd.checkpoint.load) is live again
         self.__dict__.update(state)
-        _CELLS.add(self)
+        cell_registry.register(self)
+
+    # -- what the engine asks of a cell (lbmd.cell_registry) ---------------------
+    #: the cells' lines of system.check_settings()
+    settings_check = staticmethod(cell_settings)
+
+    def is_live(self):
+        """True while all the cell's particles are in the System (False once
+        removed, e.g. at an outlet)."""
+        try:
+            self.mesh._live_parts()
+        except RuntimeError:
+            return False
+        return True
+
+    def check_fits(self, box, periodic):
+        """ValueError when the cell would overlap its own periodic image (or
+        its bonds be cut by the nearest-image convention) in a box of these
+        lengths and periodicity (check_periodic_extent)."""
+        check_periodic_extent("System", self.system, self.mesh.positions(), self.cell_type.mesh.max_edge_length(),
+                              what=f"cell {self.cell_id}", box=box, periodic=periodic)
 
     def remove(self):
         """Takes the cell out of the simulation: its particles go, and with
@@ -1030,13 +1047,7 @@ class OifCell:
         pairs = cell_type.exclusion_pairs(rings, self_cell_cutoff)
         self.n_exclusions = len(pairs)
         if len(pairs):
-            core = system._core
-            pid_pairs = np.ascontiguousarray(ids[pairs], dtype=np.int32)
-            if hasattr(core, "add_exclusions"):
-                core.add_exclusions(pid_pairs)
-            else:  # engine without the bulk call
-                for a, b in pid_pairs.tolist():
-                    core.add_exclusion(a, b)
+            system.part.add_exclusions(ids[pairs])
 
     # -- particles ----------------------------------------------------------------
     @property
@@ -1115,6 +1126,11 @@ class OifCell:
     def diameter(self):
         """Largest distance between two nodes."""
         return geo.max_pair_distance(self.mesh.positions())
+
+    def reference_diameter(self):
+        """The diameter of the relaxed mesh (the cell type's): D / D0 with
+        diameter() is the deformation lbmd.visualization colours cells by."""
+        return self.cell_type.reference_diameter()
 
     def min_edge_length(self):
         return self.mesh.min_edge_length()
@@ -1298,8 +1314,7 @@ class OifCell:
             inter = ct.local_force_interaction if which == "local" else ct.global_force_interaction
             f = np.zeros((n, 3))
             if inter is not None:
-                bond_id = self.system.bonded_inter._id_of(inter)
-                fid, forces = self.system._core.oif_forces(bond_id, term, self.cell_id)  # this cell's bonds
+                fid, forces = self.system.analysis.oif_forces(inter, term, self.cell_id)  # this cell's bonds
                 fid = np.asarray(fid)
                 forces = np.asarray(forces).reshape(-1, 3)
                 index = {int(p): k for k, p in enumerate(fid)}

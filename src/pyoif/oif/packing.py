@@ -56,6 +56,7 @@ import time
 
 import numpy as np
 
+from lbmd import shapes as lbshapes
 from lbmd.validation import is_whole_number as _is_int
 
 from . import mesh_io
@@ -152,7 +153,7 @@ def _shapes(boundaries):
                         f"{type(boundaries).__name__}")
     out = list(boundaries)
     for i, b in enumerate(out):
-        if getattr(b, "_core", None) is None:
+        if not isinstance(b, lbshapes.Shape):
             raise TypeError(f"pack_cells: parameter 'boundaries': item {i} is not an lbmd shape, got "
                             f"{type(b).__name__}")
     return out
@@ -212,8 +213,8 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
     on every rank. Raises PackingError, naming the haematocrit reached, when
     the cells do not fit.
     """
-    from lbmd import _lbmd
     import lbmd
+    from lbmd.packing import RigidPacker, check_meshes
     from .oif_classes import OifCell, OifCellType, _exclusion_rings, _real
     t_start = time.perf_counter()
     if not isinstance(system, lbmd.System):
@@ -275,7 +276,7 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
                            f"cells cannot be packed beyond about 0.6-0.7")
 
     # the packer: one level set per type (its nodes about their centroid)
-    packer = _lbmd.RigidPacker()
+    packer = RigidPacker()
     centroids = []
     for t in types:
         nodes = t.mesh._nodes
@@ -285,7 +286,7 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         spacing = float(min(0.15, extent.min() / 16.0)) if extent.min() > 0 else 0.15
         packer.add_type(nodes - centroid, mesh_io.outward(t.mesh._topo.triangles), spacing)
     for s in shapes:
-        packer.add_boundary(s._core)
+        packer.add_boundary(s)
 
     # random start: centres in the fluid (by the boundaries' signed distance),
     # at least half the thinnest cell's width apart (minimum image): two
@@ -396,9 +397,9 @@ def pack_cells(system, cell_types, haematocrit=None, counts=None, fractions=None
         # the exact check of the deformed meshes, before any cell is made
         nodes = np.concatenate(swollen)
         first = np.concatenate([[0], np.cumsum([len(x) for x in swollen])]).astype(int).tolist()
-        check = _lbmd.check_meshes(nodes, first, [int(ti) for ti in order],
-                                   [mesh_io.outward(t.mesh._topo.triangles) for t in types],
-                                   [sh._core for sh in shapes], settings, clearance + 1.0)
+        check = check_meshes(nodes, first, [int(ti) for ti in order],
+                             [mesh_io.outward(t.mesh._topo.triangles) for t in types],
+                             shapes, settings, clearance + 1.0)
         report.update(nodes_inside_cells=check["nodes_inside_cells"], min_node_distance=check["min_node_distance"],
                       min_wall_distance=check["min_wall_distance"])
         if check["nodes_inside_cells"] or check["min_wall_distance"] < 0.0:
@@ -434,8 +435,7 @@ def _swell(system, types, order, centres, rotations, scale, shapes, lo, hi, clea
     (unfolded) and adds its figures to `report`."""
     import warnings
     import lbmd
-    from lbmd import shapes as lbshapes
-    from lbmd.settings_check import membrane_trial
+    from .settings_check import membrane_trial
     from .contacts import contact_offset, contact_settings, guard_gap, set_contacts
     from .oif_classes import OifCell
     t0 = time.perf_counter()

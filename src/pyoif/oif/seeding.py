@@ -69,21 +69,17 @@ def rotation_to_angles(rot):
 
 
 def _signed_distance(shape):
-    """Fast signed distance of a point to an lbmd shape (its C++ object
-    directly, without per-call argument checks) or any object with calc_dist."""
-    core = getattr(shape, "_core", None)
-    if core is not None and hasattr(core, "calc_dist"):
-        return lambda p: core.calc_dist(p)[0]
+    """Signed distance of a point to an lbmd shape or any object with
+    calc_dist."""
     return lambda p: shape.calc_dist(p)[0]
 
 
 def _signed_distances(shape):
     """Signed distances of an (n, 3) array of points to a shape, in one call
-    to its C++ object where it has one (exact: the same values as
-    calc_dist), else point by point."""
-    core = getattr(shape, "_core", None)
-    if core is not None and hasattr(core, "signed_distances"):
-        return lambda points: np.asarray(core.signed_distances(np.ascontiguousarray(points, dtype=float)))
+    where it has signed_distances (lbmd shapes: exact, the values calc_dist
+    gives), else point by point."""
+    if hasattr(shape, "signed_distances"):
+        return shape.signed_distances
     dist = _signed_distance(shape)
     return lambda points: np.array([dist(p) for p in points], dtype=float)
 

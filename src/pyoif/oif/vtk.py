@@ -6,7 +6,7 @@ import numpy as np
 
 # the rank-0 writer and the atomic file writes live in the engine package (one
 # piece of code for lbmd's and oif's output)
-from lbmd.file_output import _is_writer, on_writer, output_path, write_text  # noqa: F401
+from lbmd.file_output import is_writer, on_writer, output_path, write_text  # noqa: F401
 
 
 def _check_name(name):
@@ -58,7 +58,7 @@ def write_polydata(path, points, polygons=None, lines=None, point_data=None, tit
                 cell_lists.append((keyword, [np.asarray(c, dtype=np.int64).ravel() for c in cells]))
             except (TypeError, ValueError):
                 raise TypeError(f"VTK output: {keyword.lower()} must be lists of point indices") from None
-    if not _is_writer():  # the other ranks only share the writer's outcome
+    if not is_writer():  # the other ranks only share the writer's outcome
         write_text(path, "", "VTK output")
         return
     out = [f"# vtk DataFile Version 3.0\n{title}\nASCII\nDATASET POLYDATA\n", f"POINTS {n} double\n"]

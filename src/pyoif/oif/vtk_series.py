@@ -70,7 +70,7 @@ class CellSeries(vtk_output.TimeSeries):
 
     def __init__(self, path=None, point_data=("velocity", "force", "normal"), folded=True):
         owner = "CellSeries"
-        self._start_series(owner, path, "cells")
+        self.start_series(owner, path, "cells")
         self.point_data = vtk_output.check_names(owner, "point_data", point_data, POINT_DATA)
         if not isinstance(folded, (bool, np.bool_)):
             raise TypeError(f"{owner}: parameter 'folded' must be True or False, got {folded!r}")
@@ -120,7 +120,7 @@ class CellSeries(vtk_output.TimeSeries):
                 {name: np.vstack(a) for name, a in arrays.items()})
 
     def _polydata(self, points, triangles, tri_cell_ids, arrays):
-        vtk, ns = self._vtk, self._ns
+        vtk, ns = self.vtk_modules
         poly = vtk.vtkPolyData()
         vtk_points = vtk.vtkPoints()
         vtk_points.SetData(ns.numpy_to_vtk(np.ascontiguousarray(points, dtype=np.float64), deep=1))
@@ -148,6 +148,6 @@ class CellSeries(vtk_output.TimeSeries):
         if cells is None:
             raise TypeError("CellSeries.write: missing required parameter 'cells'")
         cells = self._cells(cells)
-        time = self._step_time(time)
+        time = self.check_step_time(time)
         data = self._gather(cells)  # collective: every rank takes part
-        return self._write_step(time, ".vtp", self._vtk.vtkXMLPolyDataWriter, lambda: self._polydata(*data))
+        return self.write_step(time, ".vtp", self.vtk_modules[0].vtkXMLPolyDataWriter, lambda: self._polydata(*data))

@@ -41,6 +41,8 @@ from . import units
 from . import checkpoint
 from . import io
 from . import progress
+from . import packing
+from . import cell_registry
 from . import system as _system_module
 from .system import CellDriftWarning, System
 from .old_names import OldNameWarning
@@ -79,5 +81,5 @@ if size > 1 and not sys.flags.interactive:
 
 __all__ = ["System", "SimulationInstability", "CellDriftWarning", "OldNameWarning", "has_features", "assert_features",
            "features", "FeaturesError", "interactions", "shapes", "constraints", "lb", "lbboundaries", "open_boundaries",
-           "units", "checkpoint", "io", "progress",
+           "units", "checkpoint", "io", "progress", "packing", "cell_registry",
            "rank", "size", "comm"]

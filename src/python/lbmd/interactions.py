@@ -134,6 +134,15 @@ NONBONDED_MODELS = {SoftSphereInteraction.name: SoftSphereInteraction,
                     HardContactInteraction.name: HardContactInteraction}
 
 
+def membrane_angles(nodes, angles):
+    """PyOIF's angle between the triangles (A, B, C) and (B, C, D) for rows
+    (A, B, C, D) of node indices (pi for a flat pair, in [0, 2 pi)): the
+    reference angles phi0 of a relaxed mesh, by the bending force's own
+    function (so a relaxed mesh is exactly at its reference angles)."""
+    return _lbmd.membrane_angles(np.ascontiguousarray(nodes, dtype=float),
+                                 np.ascontiguousarray(angles, dtype=np.int32))
+
+
 def register_nonbonded_model(cls):
     """Make a NonBondedModel subclass available as non_bonded_inter[t1, t2].<name>."""
     NONBONDED_MODELS[cls.name] = cls

@@ -407,5 +407,11 @@ class ParticleList:
         bonds that have them (default: the bond's own, see BondedInteraction)."""
         self._system.bonded_inter._add_bonds(bond, ids, per_bond)
 
+    def add_exclusions(self, pairs):
+        """Bulk exclusions: pairs is an M×2 array of particle ids; no
+        non-bonded interaction acts between the two particles of a row
+        (a cell's nodes near each other on its own membrane)."""
+        self._core.add_exclusions(np.ascontiguousarray(pairs, dtype=np.int32))
+
     def __repr__(self):
         return f"ParticleList({len(self)} particles)"

@@ -41,6 +41,15 @@ class Shape(ParameterObject):
         """True where the shape occupies space (signed distance <= 0)."""
         return bool(self._core.is_inside(_position(f"{type(self).__name__}.is_inside", position)))
 
+    def signed_distances(self, points):
+        """Signed distances of an (n, 3) array of points, in one call (the
+        values calc_dist gives, without its per-point checks)."""
+        pts = np.ascontiguousarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            raise ValueError(f"{type(self).__name__}.signed_distances: parameter 'points' must be an "
+                             f"(n, 3) array, got shape {pts.shape}")
+        return np.asarray(self._core.signed_distances(pts))
+
 
     def _restore_core(self):
         self._validate()

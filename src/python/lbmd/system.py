@@ -343,7 +343,31 @@ class Analysis:
         self._system = system
 
     def __repr__(self):
-        return "Analysis(energy(), linear_momentum(), min_dist(), center_of_mass())"
+        return ("Analysis(energy(), linear_momentum(), min_dist(), center_of_mass(), oif_cell_sums(), "
+                "oif_energies(), oif_forces())")
+
+    # The membrane analysis calls (doc/interactions.md) take the bonded
+    # interaction itself; the cell model (oif) reads its cells through them.
+    def oif_cell_sums(self, interaction):
+        """(mol_ids, areas, volumes) of the cells whose triangles carry this
+        OifGlobalForces or OifOutDirection interaction, at the current
+        positions; volumes are absolute."""
+        s = self._system
+        return s._core.oif_cell_sums(s.bonded_inter._id_of(interaction))
+
+    def oif_energies(self, interaction, mol_id=-1):
+        """dict term -> (mol_ids, energies) of an OifLocalForces or
+        OifGlobalForces interaction; mol_id >= 0: of that cell's bonds only."""
+        s = self._system
+        return s._core.oif_energies(s.bonded_inter._id_of(interaction), mol_id)
+
+    def oif_forces(self, interaction, term, mol_id=-1):
+        """(ids, N x 3 forces) of one modulus of an OIF interaction
+        ('stretching', 'bending', 'local_area', 'visc', 'global_area',
+        'volume'), the particles' own forces untouched; mol_id >= 0: of that
+        cell's bonds only."""
+        s = self._system
+        return s._core.oif_forces(s.bonded_inter._id_of(interaction), term, mol_id)
 
     def energy(self):
         """dict with 'total', 'kinetic', 'bonded', 'non_bonded' and
@@ -397,6 +421,18 @@ class System:
     _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects",
                    "cell_checks", "cell_drift_tolerance"}
 
+    @property
+    def cells(self):
+        """The cells a cell model (oif) made in this System and that are still
+        in it, by cell_id (a tuple; lbmd.cell_registry)."""
+        from .cell_registry import cells_of
+        return cells_of(self)
+
+    @property
+    def lb_fluid(self):
+        """The active lattice-Boltzmann fluid (lbmd.lb.LBFluid), or None."""
+        return self._lb_fluid()
+
     def _lb_fluid(self):
         """The active LBFluid (Python object), or None."""
         from .lb import LBFluid
@@ -447,15 +483,9 @@ class System:
     def _check_cells_fit(self, name, value, box, periodic):
         """Refuse a box or periodicity in which a cell the script holds would
         overlap its own periodic image."""
-        try:
-            import oif
-        except ImportError:
-            return
-        for cell in oif.oif_classes.live_cells(self):
+        for cell in self.cells:
             try:
-                oif.oif_classes.check_periodic_extent(
-                    "System", self, cell.mesh.positions(), cell.cell_type.mesh.max_edge_length(),
-                    what=f"cell {cell.cell_id}", box=box, periodic=periodic)
+                cell.check_fits(box, periodic)
             except ValueError as e:
                 raise ValueError(f"System: parameter '{name}' {np.asarray(value).tolist()} does not fit "
                                  f"the cells: {e}") from None

@@ -347,27 +347,19 @@ def fluid(system, axis="z", position=None, *, component="magnitude", arrows="str
 
 # --- cells ------------------------------------------------------------------------------
 def _check_cells(owner, cells):
-    from oif import OifCell
+    """A list of cells (lbmd.cell_registry: oif.OifCell and other cell
+    models' cells), without lbmd knowing the model: what is drawn is read
+    through the cell's mesh.positions(), diameter() and reference_diameter()."""
     try:
         cells = list(cells)
     except TypeError:
-        raise TypeError(f"{owner}: parameter 'cells' must be a list of oif.OifCell, got {type(cells).__name__}") \
-            from None
+        raise TypeError(f"{owner}: parameter 'cells' must be a list of cells (oif.OifCell), got "
+                        f"{type(cells).__name__}") from None
     for k, c in enumerate(cells):
-        if not isinstance(c, OifCell):
-            raise TypeError(f"{owner}: parameter 'cells' item {k} must be an oif.OifCell, got {type(c).__name__}")
+        if not (hasattr(c, "mesh") and hasattr(c, "cell_id") and hasattr(c, "reference_diameter")):
+            raise TypeError(f"{owner}: parameter 'cells' item {k} must be a cell (an oif.OifCell), got "
+                            f"{type(c).__name__}")
     return cells
-
-
-_REFERENCE_DIAMETER = {}
-
-
-def _reference_diameter(cell):
-    from oif import geometry as geo
-    key = id(cell.cell_type)
-    if key not in _REFERENCE_DIAMETER:
-        _REFERENCE_DIAMETER[key] = (cell.cell_type, geo.max_pair_distance(cell.cell_type.mesh.positions()))
-    return _REFERENCE_DIAMETER[key][1]
 
 
 def cell_values(cells, color_by, units=None):
@@ -379,9 +371,7 @@ def cell_values(cells, color_by, units=None):
     cells = _check_cells(owner, cells)
     if isinstance(color_by, str):
         if color_by == "deformation":
-            from oif import geometry as geo
-            return (np.array([geo.max_pair_distance(c.mesh.positions()) / _reference_diameter(c) for c in cells]),
-                    "D / D0")
+            return np.array([c.diameter() / c.reference_diameter() for c in cells]), "D / D0"
         if color_by == "velocity":
             vscale, vunit = _velocity_scale(units)
             return np.array([np.linalg.norm(c.get_velocity()) * vscale for c in cells]), f"|v| {vunit}"

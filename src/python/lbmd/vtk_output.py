@@ -117,12 +117,16 @@ class TimeSeries:
     rewritten (write then rename) after each step, so it only ever lists
     complete steps and ParaView can open it during a run. Under MPI every
     rank calls ``write`` (the data are gathered collectively), rank 0 writes.
-    Subclasses: FluidSeries here, oif.CellSeries."""
+    Subclasses (FluidSeries here, oif.CellSeries) call start_series in their
+    __init__, and in their write check_step_time, then write_step with the
+    data built from vtk_modules."""
 
     def __repr__(self):
         return f"{type(self).__name__}('{self.pvd_path}', {len(self.steps)} step(s))"
 
-    def _start_series(self, owner, path, default_stem):
+    def start_series(self, owner, path, default_stem):
+        """Set up the series: owner names it in messages, path is its .pvd
+        (default_stem where the path gives no name)."""
         self._owner = owner
         self.pvd_path = check_path(owner, path, ".pvd", example=f"out/{default_stem}")
         self._folder = os.path.dirname(self.pvd_path)
@@ -139,7 +143,12 @@ class TimeSeries:
         self.__dict__.update(state)
         self._vtk, self._ns = import_vtk(self._owner)
 
-    def _step_time(self, time):
+    @property
+    def vtk_modules(self):
+        """(vtk, vtk.util.numpy_support) as imported for this series."""
+        return self._vtk, self._ns
+
+    def check_step_time(self, time):
         """time as a float, finite and later than the last step's."""
         owner = f"{self._owner}.write"
         if (time is None or isinstance(time, (bool, np.bool_)) or not isinstance(time, numbers.Real)
@@ -151,7 +160,7 @@ class TimeSeries:
                              f"after {self.steps[-1][0]!r}")
         return time
 
-    def _write_step(self, time, suffix, writer, make_data):
+    def write_step(self, time, suffix, writer, make_data):
         """The next step's file (make_data() on the writing rank, written by
         writer, a vtkXML*Writer), then the .pvd; returns the step's path."""
         name = f"{self._stem}_{len(self.steps):06d}{suffix}"
@@ -207,7 +216,7 @@ class FluidSeries(TimeSeries):
 
     def __init__(self, path=None, fluid=None, fields=("velocity", "density"), slice=None):
         owner = "FluidSeries"
-        self._start_series(owner, path, "fluid")
+        self.start_series(owner, path, "fluid")
         if fluid is None:
             raise TypeError(f"{owner}: missing required parameter 'fluid' (an active lbmd.lb.LBFluid)")
         self.fluid = _check_fluid(owner, fluid)
@@ -251,7 +260,7 @@ class FluidSeries(TimeSeries):
     def write(self, time=None):
         """Write the fluid at `time` as the next step and rewrite the
         ``.pvd``; collective under MPI. Returns the step's ``.vti`` name."""
-        time = self._step_time(time)
+        time = self.check_step_time(time)
         _check_fluid("FluidSeries.write", self.fluid)
         nodes = self.fluid[self.key]
         arrays = {}
@@ -259,7 +268,7 @@ class FluidSeries(TimeSeries):
             values = getattr(nodes, name)
             arrays[name] = (np.asarray(values, dtype=np.int32) if name == "boundary"
                             else np.asarray(values, dtype=np.float64))
-        return self._write_step(time, ".vti", self._vtk.vtkXMLImageDataWriter, lambda: self._image(arrays))
+        return self.write_step(time, ".vti", self._vtk.vtkXMLImageDataWriter, lambda: self._image(arrays))
 
 
 
