@@ -15,10 +15,10 @@ z is periodic (a quasi-2D serpentine channel, 48 nodes deep).
     pyoif maintainer/benchmarks/boundary_setup.py [--modes lazy,eager,union]
         [--single-precision] [--csv boundary_setup.csv]
 
-Times, per mode, from the first add to the flags being ready (the first
-query, lbf._core.n_fluid_nodes, included): lazy = the 12 adds, then the
-query (the fluid flags once); eager = a flagging forced after each add
-(update_boundaries(), as every add did before lazy flagging); union = the
+Times, per mode, from the first add to the flags being ready
+(system.prepare(), the explicit collective step, included): lazy = the 12
+adds, then system.prepare() (the fluid flags once); eager = system.prepare()
+after each add (as every add flagged before lazy flagging); union = the
 12 shapes as one Union in one add. The fluid is created beforehand (not
 timed; its allocation time is printed). Wall and CPU seconds are printed
 (CPU: of this process, all threads). With an engine from before lazy
@@ -83,8 +83,9 @@ def run(mode, single):
         for sh in shape_list:
             s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=sh))
             if mode == "eager":
-                core.update_boundaries()
+                s.prepare()
     t_add = time.perf_counter() - t0
+    s.prepare()
     n_fluid = core.n_fluid_nodes  # flags ready
     t_total = time.perf_counter() - t0
     cpu_total = time.process_time() - c0

@@ -62,8 +62,10 @@ void compare(const Vec3i& node_grid, bool boundaries, double kT) {
   }
   for (lb::LBFluid* f : {&serial, &split}) {
     stir(*f);
-    if (boundaries)
+    if (boundaries) {
       f->set_boundaries(channel_with_post());
+      f->update_boundaries(); // the explicit collective flagging (System::prepare's)
+    }
     for (int s = 0; s < 23; ++s)
       f->step();
   }

@@ -1,10 +1,13 @@
-"""Boundary set-up (also run on 2 ranks): the flags are computed lazily, once, by the first call
-that needs them, in one pass per boundary over its bounding box. They equal
-a reference from Python (shape.is_inside at every node centre, the first
-boundary in the list that contains the node wins), whether the boundaries
-are added one by one, before or after the fluid, or as one Union; adding
-ten boundaries flags once (the fluid's n_flaggings counter); boundaries
-that leave no fluid are refused, by name, at the first use of the fluid."""
+"""Boundary set-up (also run on 2 ranks): the flags are computed once, by
+the explicit collective step system.prepare() (which every run and every
+collective data call of the fluid begins with), in one pass per boundary
+over its bounding box. They equal a reference from Python (shape.is_inside
+at every node centre, the first boundary in the list that contains the
+node wins), whether the boundaries are added one by one, before or after
+the fluid, or as one Union; adding ten boundaries flags once (the fluid's
+n_flaggings counter); the fluid's plain attributes never flag (they raise
+while boundaries are pending, naming system.prepare()); boundaries that
+leave no fluid are refused, by name, at the first use of the fluid."""
 import unittest
 
 import numpy as np
@@ -137,7 +140,7 @@ class Lazy(unittest.TestCase):
                 shape=shapes.Sphere(center=[x + 1.0, 5.0, 4.0], radius=1.2)))
         self.assertEqual(core.n_flaggings, before)
         self.assertTrue(core.boundaries_pending)
-        self.assertGreater(lbf[2, 5, 4].boundary, 0)  # a query flags, once
+        self.assertGreater(lbf[2, 5, 4].boundary, 0)  # a collective query prepares: flags once
         self.assertEqual(core.n_flaggings, before + 1)
         self.assertFalse(core.boundaries_pending)
         lbf.total_mass()
@@ -152,6 +155,9 @@ class Lazy(unittest.TestCase):
         self.assertEqual(len(s.lbboundaries), 13)
 
     def test_every_entry_point_flags(self):
+        """The collective calls begin with system.prepare(); the plain
+        attributes of the fluid never communicate: they raise while
+        boundaries are pending, and read after system.prepare()."""
         wall = shapes.Wall(normal=[0, 0, 1], dist=2.0)
         for query in (lambda s, lbf: lbf.total_mass(),
                       lambda s, lbf: lbf.total_momentum(),
@@ -159,8 +165,8 @@ class Lazy(unittest.TestCase):
                       lambda s, lbf: s.lbboundaries[0].get_force(),
                       lambda s, lbf: lbf.get_interpolated_velocity([1.0, 1.0, 1.0]),
                       lambda s, lbf: s.integrator.run(1),
-                      lambda s, lbf: lbf._core.n_fluid_nodes,
-                      lambda s, lbf: lbf._core.local_shape):
+                      lambda s, lbf: s.check_settings(),
+                      lambda s, lbf: s.prepare()):
             s = system()
             lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
             s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=wall))
@@ -168,6 +174,18 @@ class Lazy(unittest.TestCase):
             query(s, lbf)
             self.assertFalse(lbf._core.boundaries_pending)
             self.assertEqual(lbf._core.n_fluid_nodes, 14 * 11 * 7)
+        for attribute in ("n_fluid_nodes", "n_links", "local_shape", "local_origin", "decomposition",
+                          "halo_bytes", "shared_halo_peers"):
+            s = system()
+            lbf = s.actors.add(lbmd.lb.LBFluid(**GOOD))
+            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=wall))
+            with self.subTest(attribute=attribute):
+                with self.assertRaisesRegex(ValueError, r"call system\.prepare\(\) first"):
+                    getattr(lbf._core, attribute)
+                self.assertTrue(lbf._core.boundaries_pending)
+                s.prepare()
+                getattr(lbf._core, attribute)
+                self.assertFalse(lbf._core.boundaries_pending)
 
     def test_populations_kept_until_flagged(self):
         """Nodes that turn solid lose their populations and come back at

@@ -73,6 +73,7 @@ class Decomposition(unittest.TestCase):
             lbf2 = lbmd.lb.LBFluid(agrid=1.0, tau=1.0, dens=1.0, visc=0.3)
             s2.actors.add(lbf2)
             s2.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[0, 0, -1], dist=-7.0)))
+            s2.prepare()  # the explicit collective step: flags, balances the cuts
             say("balanced", lbf2._core.decomposition, lbf2._core.n_fluid_nodes)
             """)
         for rank in "01":

@@ -108,8 +108,7 @@ Vec3 interpolated_velocity(LBFluid& fluid, const BoxGeometry& box, const Vec3& p
   // the 8 nodes around pos and their trilinear weights; node (i, j, k) sits
   // at ((i, j, k) + 1/2) agrid. Decomposed: computed by the rank of the
   // first node, summed over the ranks (collective).
-  fluid.update_boundaries();
-  fluid.refresh_ghost_velocities();
+  fluid.refresh_ghost_velocities(); // (requires the lattice flagged)
   const StencilFrame frame(fluid);
   bool base_owned = false;
   Vec3i base;
@@ -384,7 +383,7 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
                       const CouplingDistribution* distribution) {
   if (params.gamma <= 0.0)
     return;
-  fluid.update_boundaries(); // the flags and cuts the stencils use
+  fluid.require_flagged("the particle coupling"); // the flags and cuts the stencils use
   // Decomposed lattice: each rank couples the particles whose stencils
   // touch its subdomain, in the same order as one rank would, deposits on
   // its own nodes only, and the rank of a stencil's first node gives the

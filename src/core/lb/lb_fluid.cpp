@@ -430,10 +430,22 @@ void LBFluid::set_boundaries(const std::vector<BoundarySpec>& boundaries) {
     require(b.shape != nullptr, "LBBoundary: shape must be set");
     require(b.velocity.allFinite(), "LBBoundary: velocity must be finite");
   }
-  // flagged by the first call that needs the flags (update_boundaries)
+  ++m_state_version;
+  // no boundaries where there were none (a fresh fluid, a clear() of an
+  // empty list): the flags stand, nothing waits for system.prepare()
+  if (boundaries.empty() && m_boundaries.empty() && !m_boundaries_pending)
+    return;
+  // flagged by the explicit collective step (update_boundaries, System::prepare)
   m_pending_boundaries = boundaries;
   m_boundaries_pending = true;
-  ++m_state_version;
+}
+
+void LBFluid::require_flagged(const char* what) const {
+  if (m_boundaries_pending)
+    throw InputError(std::string("LBFluid: ") + what +
+                     " needs the lattice flagged for its boundaries, and system.lbboundaries "
+                     "changed since the last system.prepare() or run: call system.prepare() "
+                     "first (collective: on every rank)");
 }
 
 void LBFluid::update_boundaries() {
@@ -589,7 +601,7 @@ std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) 
 }
 
 Vec3 LBFluid::boundary_force(int b) const {
-  flags_current();
+  require_flagged("a boundary's force");
   require(b >= 0 && b < static_cast<int>(m_boundaries.size()),
           "boundary index " + std::to_string(b) + " out of range");
   // Momentum exchange of the last streaming (Ladd 1994): the population
@@ -610,7 +622,7 @@ Vec3 LBFluid::boundary_force(int b) const {
 }
 
 std::size_t LBFluid::checked_node(const Vec3i& node) const {
-  flags_current();
+  require_flagged("a lattice node");
   for (int d = 0; d < 3; ++d)
     if (node[d] < 0 || node[d] >= m_global[d])
       throw InputError("lattice node index " + std::to_string(node[d]) + " on axis " +
@@ -650,7 +662,7 @@ void LBFluid::check_block(const Vec3i& lo, const Vec3i& hi) const {
 
 std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
                                        const Vec3i& hi) const {
-  flags_current();
+  require_flagged("reading lattice nodes");
   const int nc = block_components(prop);
   check_block(lo, hi);
   const Vec3i n = hi - lo;
@@ -699,7 +711,7 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
 
 void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                         const std::vector<double>& values) {
-  update_boundaries();
+  require_flagged("setting lattice nodes");
   const int nc = block_components(prop);
   if (prop != "velocity" && prop != "density" && prop != "population" &&
       prop != "stored_population" && prop != "coupling_field")
@@ -875,7 +887,7 @@ void LBFluid::compute_coupling_velocities() {
 }
 
 double LBFluid::total_mass() const {
-  flags_current();
+  require_flagged("the fluid's total mass");
   double mass = 0.0; // summed in double in either precision
   with_populations([&](const auto* populations) {
     for (const Run& r : m_runs)
@@ -895,7 +907,7 @@ double LBFluid::total_mass() const {
 }
 
 Vec3 LBFluid::total_momentum() const {
-  flags_current();
+  require_flagged("the fluid's total momentum");
   Vec3 j = Vec3::Zero();
   with_populations([&](const auto* populations) {
     for (const Run& r : m_runs) {
@@ -947,7 +959,7 @@ template <class Write> void write_on_root(MPI_Comm comm, int size, int rank, Wri
 } // namespace
 
 void LBFluid::write_vtk_field(const std::string& path, const std::string& prop) const {
-  flags_current();
+  require_flagged("the fluid's VTK output");
   // (x, y, z) blocks come z fastest; VTK wants x fastest
   const std::vector<double> block = get_block(prop, Vec3i::Zero(), m_global);
   const std::size_t nc = block.size() / static_cast<std::size_t>(m_global.prod());

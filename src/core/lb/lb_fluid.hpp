@@ -199,15 +199,14 @@ public:
   double total_mass() const;
 
   // --- boundaries -------------------------------------------------------------
-  // Lazy: set_boundaries() checks its input and records the list; the nodes
-  // are flagged (and the fluid runs, bounce-back links, halo lists and the
-  // load balance derived) by update_boundaries(), which every entry point
-  // that needs them calls first: step(), the node and block access, the
-  // totals, boundary_force(), the output, the particle coupling,
-  // System::integrate. Adding N boundaries one by one thus flags once.
-  // Under MPI the first such call after set_boundaries() is collective (the
-  // block access, totals, output, runs and coupling already are; a rank
-  // alone asking for node_*() first would wait for the others).
+  // set_boundaries() checks its input and records the list; the nodes are
+  // flagged (and the fluid runs, bounce-back links, halo lists and the load
+  // balance with its repartition derived) by update_boundaries(), one
+  // explicit collective step that only System::prepare() calls (Python's
+  // system.prepare(), and the start of every run). Adding N boundaries one
+  // by one thus flags once. Everything that reads the flags or what derives
+  // from them checks require_flagged() and throws while boundaries are
+  // pending: no query ever turns into a collective call.
   /** Replaces all boundaries (flagged later, see above); nodes that become
    *  fluid start at rest at `dens`. Throws InputError at once for a null
    *  shape, a non-finite velocity or too many boundaries. */
@@ -231,17 +230,20 @@ public:
   void update_boundaries();
   /** Whether set_boundaries() was called since the last flagging. */
   bool boundaries_pending() const { return m_boundaries_pending; }
+  /** Throws InputError, naming `what` and system.prepare(), while
+   *  boundaries are pending (local: never communicates). */
+  void require_flagged(const char* what) const;
   /** Number of flagging passes so far (set-up cost; tests of laziness). */
   std::uint64_t n_flaggings() const { return m_n_flaggings; }
   /** Force of the fluid on boundary b in the last update (momentum exchange). */
   Vec3 boundary_force(int b) const;
   /** Over all ranks. */
   std::size_t n_fluid_nodes() const {
-    flags_current();
+    require_flagged("the number of fluid nodes");
     return m_n_fluid_global;
   }
   std::size_t n_links() const {
-    flags_current();
+    require_flagged("the number of bounce-back links");
     return m_n_links_global;
   }
   /** Bytes this rank sends to other ranks in one population halo exchange. */
@@ -432,7 +434,7 @@ public:
     bool ghosts_pending = false;
   };
   CouplingLedger& coupling_ledger() {
-    update_boundaries(); // a flagging may move the cuts, which resets the ledger
+    require_flagged("the particle coupling"); // a flagging moves the cuts, resetting the ledger
     return m_ledger;
   }
   /** The coupling stencils' steps (CouplingLedger::StencilSteps). */
@@ -494,13 +496,6 @@ private:
   void write_vtk_field(const std::string& path, const std::string& prop) const;
   /** Throws InputError unless lo <= node < hi is a non-empty block of the lattice. */
   void check_block(const Vec3i& lo, const Vec3i& hi) const;
-  /** update_boundaries() from a const query: the flags and what derives
-   *  from them are a cache of the boundaries already set (an LBFluid is
-   *  never a const object, so the cast is sound). */
-  void flags_current() const {
-    if (m_boundaries_pending)
-      const_cast<LBFluid*>(this)->update_boundaries();
-  }
   /** Flags of this rank's padded nodes (ghosts too) for these boundaries:
    *  0 fluid, b + 1 for the first boundary b whose shape contains the
    *  node's centre (wrapped into the box). Each boundary visits only the

@@ -631,7 +631,7 @@ void LBFluid::build_halo_pairs() {
 }
 
 int LBFluid::shared_halo_peers() const {
-  flags_current();
+  require_flagged("the shared-memory halo peers");
   int n = 0;
   for (const HaloPeer& p : m_peers)
     n += p.shared ? 1 : 0;
@@ -732,7 +732,7 @@ template <typename Real> void LBFluid::pack_shared_halo(const Real* f, bool fill
 }
 
 std::size_t LBFluid::halo_bytes() const {
-  flags_current();
+  require_flagged("the halo size");
   std::size_t n = 0;
   for (const HaloPeer& p : m_peers)
     n += p.face.size(); // sent by a fill, as many as the ghosts folded back
@@ -825,7 +825,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
 }
 
 void LBFluid::refresh_ghost_velocities() {
-  update_boundaries();
+  require_flagged("the fluid velocity at a point");
   if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
     return;
   const auto start = std::chrono::steady_clock::now();
@@ -1016,7 +1016,7 @@ void LBFluid::check_usable() const {
 }
 
 void LBFluid::step() {
-  update_boundaries();
+  require_flagged("a lattice update");
   check_usable();
   ++m_state_version;
   with_populations([this](auto* f) { step_stored_as(f); });

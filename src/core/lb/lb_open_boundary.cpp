@@ -174,6 +174,7 @@ void LBFluid::set_open_boundary_gains(const std::vector<double>& gains) {
 }
 
 double LBFluid::open_boundary_mass_flux(std::size_t i) const {
+  require_flagged("an open face's mass flux");
   require(i < m_open.size(), "open boundary " + std::to_string(i) + " does not exist");
   return open_boundary_fluxes(m_open[i]).first;
 }

@@ -19,9 +19,8 @@ void System::prepare_step(int moved) {
       cells.update_ghosts(particles, box);
     return;
   }
-  // the cuts the owners follow: boundaries set since the last flagging are
-  // flagged first (they may move the cuts; collective like this step)
-  m_lb->update_boundaries();
+  // the cuts the owners follow: flagged by prepare() (a flagging may move them)
+  m_lb->require_flagged("sharing the particles over the ranks");
   // Particles spread over the ranks: every rank tests its own (moved: 1
   // beyond the skin, 0 not, -1 test here, -3 too fast a step), all agree
   // on the largest code: 0 the copies are refreshed; 1 all copies made
@@ -492,6 +491,11 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
     raise_agreed(failure);
 }
 
+void System::prepare() {
+  if (m_lb)
+    m_lb->update_boundaries(); // collective; nothing when no boundary changed
+}
+
 void System::compute_forces() {
   prepare_step();
   force_loop<false>(nullptr);
@@ -571,8 +575,8 @@ void System::integrate(int n_steps, bool recalc_forces, bool reuse_forces) {
   // forces stale: recomputing them at every call made a run split into
   // calls differ from one run -- the last step's coupling force recomputed
   // against the fluid updated since)
+  prepare(); // the one collective set-up step: boundaries set since the last run flagged now
   if (m_lb) {
-    m_lb->update_boundaries(); // boundaries set since the last run: flagged now, once
     m_lb->validate(box, m_time_step);
     m_lb->check_usable(); // refused before any particle moves or time advances
     // populations, boundaries or ext_force_density set since the last run:

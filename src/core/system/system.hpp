@@ -160,6 +160,12 @@ public:
   // --- integration ------------------------------------------------------------
   /** n velocity-Verlet steps, all in C++. */
   void integrate(int n_steps, bool recalc_forces = false, bool reuse_forces = false);
+  /** The explicit collective set-up step (every rank calls it): flags the
+   *  lattice for boundaries set since the last one, which may move the
+   *  ranks' cuts (load balance) and the populations with them. integrate()
+   *  calls it first; queries never do (they throw while boundaries are
+   *  pending: LBFluid::require_flagged). */
+  void prepare();
   /** Throws SimulationInstability naming the fastest particle (a drift, in
    *  the given step, of
    *  more than half the box, or with pair contacts more than the skin, in

@@ -56,16 +56,6 @@ void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const V
   fluid.set_block(prop, lo, hi, std::vector<double>(values.data(), values.data() + values.size()));
 }
 
-/** Flags the boundaries set since the last flagging, if any: collective
- *  (every rank has the same ones pending), a rank left waiting says so. */
-void flag_pending(LBFluid& fluid) {
-  if (!fluid.boundaries_pending())
-    return;
-  collective_entry(
-      "the flagging of the boundaries (the fluid's first use after lbboundaries changed)");
-  fluid.update_boundaries();
-}
-
 } // namespace
 
 void bind_lb(py::module_& m) {
@@ -94,42 +84,38 @@ void bind_lb(py::module_& m) {
            py::arg("ext_force_density"), py::arg("kT"), py::arg("seed"), py::arg("collision"),
            py::arg("n_threads"), py::arg("box_l"), py::arg("node_grid") = Vec3i::Zero(),
            py::arg("balance") = true, py::arg("single_precision") = false)
-      // the decomposition as the load balance of the boundaries' flagging
-      // leaves it: flagged first if boundaries are pending (collective then)
-      .def_property_readonly("node_grid",
-                             [](LBFluid& f) {
-                               flag_pending(f);
-                               return f.domain().dims();
-                             })
+      // the grid of subdomains is fixed when the fluid is made; the cuts
+      // below are where the load balance of the flagging (system.prepare())
+      // leaves them: refused while boundaries are pending
+      .def_property_readonly("node_grid", [](const LBFluid& f) { return f.domain().dims(); })
       .def_property_readonly("decomposition",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the decomposition");
                                return f.domain().describe();
                              })
       .def_property_readonly("local_origin",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the decomposition");
                                return f.local_origin();
                              })
       .def_property_readonly("local_shape",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the decomposition");
                                return f.local_grid();
                              })
       .def_property_readonly("n_flaggings", &LBFluid::n_flaggings,
-                             "flagging passes so far (boundaries are flagged lazily, once)")
+                             "flagging passes so far (system.prepare() flags once for any number "
+                             "of boundaries set since the last one)")
       .def_property_readonly("boundaries_pending", &LBFluid::boundaries_pending)
-      .def("update_boundaries", &flag_pending,
-           "collective: flags the boundaries set since the last flagging (else nothing)")
       .def_property_readonly("halo_bytes",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the halo size");
                                return f.halo_bytes();
                              })
       .def_property_readonly("halo_seconds", &LBFluid::halo_seconds)
       .def_property_readonly("shared_halo_peers",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the shared-memory halo peers");
                                return f.shared_halo_peers();
                              })
       .def_property_readonly("coupling_exchange_seconds", &LBFluid::coupling_exchange_seconds)
@@ -139,13 +125,13 @@ void bind_lb(py::module_& m) {
       .def_property_readonly("tau", &LBFluid::tau)
       .def_property_readonly("n_updates", &LBFluid::n_updates)
       .def_property_readonly("n_fluid_nodes",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the number of fluid nodes");
                                return f.n_fluid_nodes();
                              })
       .def_property_readonly("n_links",
-                             [](LBFluid& f) {
-                               flag_pending(f);
+                             [](const LBFluid& f) {
+                               f.require_flagged("the number of bounce-back links");
                                return f.n_links();
                              })
       .def_property("n_threads", &LBFluid::n_threads, &LBFluid::set_n_threads)
@@ -170,16 +156,8 @@ void bind_lb(py::module_& m) {
             }
           },
           py::arg("n") = 1)
-      .def("total_mass",
-           [](LBFluid& f) {
-             flag_pending(f);
-             return f.total_mass();
-           })
-      .def("total_momentum",
-           [](LBFluid& f) {
-             flag_pending(f);
-             return f.total_momentum();
-           })
+      .def("total_mass", [](LBFluid& f) { return f.total_mass(); })
+      .def("total_momentum", [](LBFluid& f) { return f.total_momentum(); })
       .def("set_boundaries",
            [](LBFluid& f, const std::vector<std::pair<std::shared_ptr<shapes::Shape>, Vec3>>& b) {
              std::vector<lb::BoundarySpec> specs;
@@ -201,26 +179,14 @@ void bind_lb(py::module_& m) {
       .def("open_boundary_gains", &LBFluid::open_boundary_gains)
       .def("set_open_boundary_gains", &LBFluid::set_open_boundary_gains)
       .def("open_boundary_mass_flux",
-           [](LBFluid& f, std::size_t i) {
-             flag_pending(f);
-             return f.open_boundary_mass_flux(i);
-           })
-      .def("boundary_force",
-           [](LBFluid& f, int b) {
-             flag_pending(f);
-             return f.boundary_force(b);
-           })
+           [](LBFluid& f, std::size_t i) { return f.open_boundary_mass_flux(i); })
+      .def("boundary_force", [](LBFluid& f, int b) { return f.boundary_force(b); })
       .def("get_block", &get_block)
       .def("set_block", &set_block)
       .def("write_vtk_velocity",
-           [](LBFluid& f, const std::string& path) {
-             flag_pending(f);
-             f.write_vtk_velocity(path);
-           })
-      .def("write_vtk_boundary", [](LBFluid& f, const std::string& path) {
-        flag_pending(f);
-        f.write_vtk_boundary(path);
-      });
+           [](LBFluid& f, const std::string& path) { f.write_vtk_velocity(path); })
+      .def("write_vtk_boundary",
+           [](LBFluid& f, const std::string& path) { f.write_vtk_boundary(path); });
 
   m.def(
       "copy_bandwidth",

@@ -467,6 +467,14 @@ void bind_system(py::module_& m) {
       // (KeyboardInterrupt by default; a handler that returns lets the run
       // go on). No Python code runs in the middle of a step.
       .def(
+          "prepare",
+          [](System& s) {
+            collective_entry("system.prepare()");
+            s.prepare();
+          },
+          "Collective: flags the lattice for boundaries set since the last call (which may "
+          "move the ranks' cuts); integrate() begins with it, queries never call it.")
+      .def(
           "integrate",
           [](System& s, int steps, bool recalc_forces, bool reuse_forces, bool interruptible) {
             // returns whether a walltime signal stopped the run (StopSignals)

@@ -100,6 +100,7 @@ def system_state(system):
     fluid = system._core_fluid()
     fluid_state = None
     if fluid is not None:
+        system.prepare()  # collective: populations of the flagged lattice
         shape = tuple(int(n) for n in fluid.shape)
         for prop in ("stored_population", "coupling_field"):
             block = np.asarray(fluid.get_block(prop, [0, 0, 0], list(shape)))
@@ -181,6 +182,7 @@ def restore_system(system, state):
         core.add_exclusion(int(a), int(b))
     fluid = system._core_fluid()
     if fluid is not None and saved["fluid"] is not None:
+        system.prepare()  # collective: the restored boundaries flagged before the populations
         shape = [int(n) for n in fluid.shape]
         for prop in ("stored_population", "coupling_field"):
             block = arrays[f"{prefix}/fluid/{prop}"]

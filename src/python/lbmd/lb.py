@@ -110,6 +110,14 @@ class LBFluid(ParameterObject):
             raise RuntimeError("LBFluid: add the fluid to a system first (system.actors.add(lbf))")
         return self._core
 
+    def _collective_core(self):
+        """The core for a collective data access (node reads and writes,
+        totals, the interpolated velocity, output): system.prepare() first,
+        so that boundaries added since the last run are flagged."""
+        core = self._checked_core()
+        self._system.prepare()
+        return core
+
     # --- properties -------------------------------------------------------------
     @property
     def shape(self):
@@ -132,25 +140,25 @@ class LBFluid(ParameterObject):
                                  "(settable: ext_force_density, n_threads)")
 
     def total_mass(self):
-        return self._checked_core().total_mass()
+        return self._collective_core().total_mass()
 
     def total_momentum(self):
         """Momentum of the fluid (see doc/lb.md for the half-force convention)."""
-        return np.asarray(self._checked_core().total_momentum())
+        return np.asarray(self._collective_core().total_momentum())
 
     def get_interpolated_velocity(self, pos):
         """Fluid velocity at pos, trilinear in the 8 surrounding nodes."""
         p = Param("pos", "vec3").convert("LBFluid.get_interpolated_velocity", pos)
-        self._checked_core()
+        self._collective_core()
         return np.asarray(self._system._core.lb_interpolated_velocity(p))
 
     def write_vtk_velocity(self, path):
         """Legacy VTK structured points (ParaView) of the node velocities."""
-        self._checked_core().write_vtk_velocity(_path(path))
+        self._collective_core().write_vtk_velocity(_path(path))
 
     def write_vtk_boundary(self, path):
         """Legacy VTK structured points of the boundary flags (0 fluid, b + 1 boundary b)."""
-        self._checked_core().write_vtk_boundary(_path(path))
+        self._collective_core().write_vtk_boundary(_path(path))
 
     # --- ESPResSo <= 4.1 names (lbmd.old_names) ------------------------------
     def print_vtk_velocity(self, path, bb1=None, bb2=None):
@@ -221,7 +229,7 @@ class LBFluidRoutines:
             self._hi.append(hi)
 
     def _get(self, prop):
-        block = np.asarray(self._fluid._checked_core().get_block(prop, self._lo, self._hi))
+        block = np.asarray(self._fluid._collective_core().get_block(prop, self._lo, self._hi))
         block = block[tuple(self._sub)]
         block = block.reshape(block.shape[:3] + self._shapes[prop])
         idx = tuple(0 if d else slice(None) for d in self._drop)
@@ -231,7 +239,7 @@ class LBFluidRoutines:
         return out.astype(int) if prop == "boundary" else out
 
     def _set(self, prop, value):
-        core = self._fluid._checked_core()
+        core = self._fluid._collective_core()
         full = np.asarray(core.get_block(prop, self._lo, self._hi))
         full = full.reshape(full.shape[:3] + self._shapes[prop])
         try:

@@ -27,7 +27,7 @@ class LBBoundary(ParameterObject):
         fluid = owner._fluid()
         if fluid is None:
             raise RuntimeError("LBBoundary.get_force: no lattice-Boltzmann fluid is active")
-        return np.asarray(fluid._core.boundary_force(owner._list.index(self)))
+        return np.asarray(fluid._collective_core().boundary_force(owner._list.index(self)))
 
 
 class LBBoundaries:

@@ -142,6 +142,7 @@ def _fluid_settings(system, fluid, report):
 def check_settings(system, warn=False):
     """The report (SettingsReport); with warn, a RuntimeWarning per setting
     outside its limit (on rank 0 only)."""
+    system.prepare()  # collective: the fluid's flags current (doc/engine.md)
     fluid = None
     for actor in system.actors:
         if hasattr(actor, "agrid") and hasattr(actor, "tau"):

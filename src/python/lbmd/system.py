@@ -126,6 +126,7 @@ class Integrator:
             from . import progress as _progress
             return _progress.run(self, v["steps"], v["recalc_forces"], v["reuse_forces"])
         self._system._check_ready()
+        self._system.prepare()  # the run's collective set-up step, before anything reads the flags
         fluid = self._system._lb_fluid()
         if fluid is not None and len(fluid.open_boundaries):
             fluid.open_boundaries._before_run()
@@ -371,7 +372,9 @@ class Analysis:
 
     def energy(self):
         """dict with 'total', 'kinetic', 'bonded', 'non_bonded' and
-        ('bonded', id) per bonded interaction."""
+        ('bonded', id) per bonded interaction. Collective (begins with
+        system.prepare())."""
+        self._system.prepare()
         return self._system._core.energies()
 
     def linear_momentum(self, include_particles=True, include_lbfluid=True):
@@ -379,6 +382,7 @@ class Analysis:
         if include_particles:
             p += self._system._core.particle_momentum()
         if include_lbfluid:
+            self._system.prepare()  # collective: the fluid's total over its flagged nodes
             p += self._system._core.fluid_momentum()
         return p
 
@@ -420,6 +424,18 @@ class System:
 
     _attributes = {"box_l", "periodicity", "time_step", "time", "min_global_cut", "max_oif_objects",
                    "cell_checks", "cell_drift_tolerance"}
+
+    def prepare(self):
+        """The explicit collective set-up step (every rank calls it under
+        mpirun): flags the lattice for the boundaries added or removed since
+        the last one, which may move the ranks' cuts (load balance) and the
+        fluid with them. Every run begins with it, and so do the fluid's
+        collective data calls (node reads and writes, totals, boundary
+        forces, the interpolated velocity, VTK output, check_settings,
+        checkpoints); the fluid's plain attributes (n_fluid_nodes,
+        decomposition, ...) never communicate and raise while boundaries
+        are pending. Nothing happens when nothing changed (doc/engine.md)."""
+        self._core.prepare()
 
     @property
     def cells(self):
