@@ -63,6 +63,7 @@ def make_fluid(shape, threads, walls=None, precision="double"):
         system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 1, 0], dist=lo)))
         system.lbboundaries.add(lbboundaries.LBBoundary(
             shape=shapes.Wall(normal=[0, -1, 0], dist=-(shape[1] - hi))))
+    system.prepare()  # the boundaries flagged (the lattice updates below do not flag)
     return system, fluid
 
 
