@@ -17,6 +17,7 @@
 // stress modes, so this relaxes each DSL mode group at its own rate while
 // costing about as much as BGK. It is written per opposite pair (q, q+1):
 // f+ = (f_q + f_q+1)/2 and f- = (f_q - f_q+1)/2.
+#include "communication/neighbour_exchange.hpp"
 #include "lb/lb_fluid.hpp"
 
 #include "utils/errors.hpp"
@@ -666,15 +667,14 @@ void LBFluid::connect_shared_halo() {
   constexpr int fields = 8;
   auto exchange = [&](auto make_send, int tag) {
     std::vector<std::uint64_t> send(fields * m_peers.size()), recv(fields * m_peers.size());
-    std::vector<MPI_Request> requests(2 * m_peers.size());
+    NeighbourExchange round(m_grid.comm(), tag);
+    for (std::size_t k = 0; k < m_peers.size(); ++k)
+      round.receive(m_peers[k].rank, recv.data() + fields * k, fields);
     for (std::size_t k = 0; k < m_peers.size(); ++k) {
       make_send(m_peers[k], send.data() + fields * k);
-      MPI_Irecv(recv.data() + fields * k, fields, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
-                &requests[2 * k]);
-      MPI_Isend(send.data() + fields * k, fields, MPI_UINT64_T, m_peers[k].rank, tag, m_grid.comm(),
-                &requests[2 * k + 1]);
+      round.send(m_peers[k].rank, send.data() + fields * k, fields);
     }
-    MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    round.wait();
     return recv;
   };
   const std::vector<std::uint64_t> offers = exchange(
@@ -749,9 +749,6 @@ std::vector<Real>& halo_buffer(std::vector<double>& as_double, std::vector<float
   else
     return as_double;
 }
-template <typename Real> MPI_Datatype mpi_type() {
-  return std::is_same_v<Real, float> ? MPI_FLOAT : MPI_DOUBLE;
-}
 /** Stores received halo values at their places: a face plane's
  *  populations, across the split axis a lattice row apart, each on its own
  *  cache line and a page every few places, which the hardware prefetchers
@@ -779,17 +776,14 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
   // fill: faces out, ghosts in; fold: ghosts out, faces in (a copy, as in
   // the periodic case: the face slot receives the population the
   // neighbour's node pushed across, its only value in this update)
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * m_peers.size());
+  NeighbourExchange round(m_grid.comm(), 71);
   for (const HaloPeer& p : m_peers) {
     if (p.shared)
       continue;
     const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
     std::vector<Real>& recv = halo_buffer<Real>(p.recv, p.recv_single);
     recv.resize(in.size());
-    requests.emplace_back();
-    MPI_Irecv(recv.data(), static_cast<int>(recv.size()), mpi_type<Real>(), p.rank, 71,
-              m_grid.comm(), &requests.back());
+    round.receive(p.rank, recv.data(), recv.size());
   }
   for (const HaloPeer& p : m_peers) {
     if (p.shared)
@@ -799,9 +793,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
     send.resize(out.size());
     for (std::size_t i = 0; i < out.size(); ++i)
       send[i] = f[out[i]];
-    requests.emplace_back();
-    MPI_Isend(send.data(), static_cast<int>(send.size()), mpi_type<Real>(), p.rank, 71,
-              m_grid.comm(), &requests.back());
+    round.send(p.rank, send.data(), send.size());
   }
   // (the bounce-back, which touches other places, was tried here, between
   // the sends and the wait, 27 Nov 2026: the wait did not shorten, as the
@@ -817,7 +809,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
     if (p.shared)
       scatter_places(p.peer_halo.at<const Real>(p.shared.data(), parity),
                      fill_ghosts ? p.ghost : p.face, f);
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  round.wait();
   for (const HaloPeer& p : m_peers)
     if (!p.shared)
       scatter_places(halo_buffer<Real>(p.recv, p.recv_single).data(),
@@ -830,13 +822,10 @@ void LBFluid::refresh_ghost_velocities() {
     return;
   const auto start = std::chrono::steady_clock::now();
   // (the peers' halo buffers: this exchange never overlaps a halo step)
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * m_peers.size());
+  NeighbourExchange round(m_grid.comm(), 72);
   for (const HaloPeer& peer : m_peers) {
     peer.recv.resize(3 * peer.velocity_slot.size());
-    requests.emplace_back();
-    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 72,
-              m_grid.comm(), &requests.back());
+    round.receive(peer.rank, peer.recv.data(), peer.recv.size());
   }
   for (const HaloPeer& peer : m_peers) {
     peer.send.clear();
@@ -844,11 +833,9 @@ void LBFluid::refresh_ghost_velocities() {
       const Vec3 u = velocity_at_index(n);
       peer.send.insert(peer.send.end(), {u[0], u[1], u[2]});
     }
-    requests.emplace_back();
-    MPI_Isend(peer.send.data(), static_cast<int>(peer.send.size()), MPI_DOUBLE, peer.rank, 72,
-              m_grid.comm(), &requests.back());
+    round.send(peer.rank, peer.send.data(), peer.send.size());
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  round.wait();
   for (const HaloPeer& peer : m_peers)
     for (std::size_t i = 0; i < peer.velocity_slot.size(); ++i)
       m_ghost_velocity[peer.velocity_slot[i]] =
@@ -891,13 +878,10 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
       }
     return k;
   };
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * m_peers.size());
+  NeighbourExchange round(m_grid.comm(), 73);
   for (const HaloPeer& peer : m_peers) {
     peer.recv.resize(peer.shared ? 0 : per * peer.velocity_slot.size());
-    requests.emplace_back();
-    MPI_Irecv(peer.recv.data(), static_cast<int>(peer.recv.size()), MPI_DOUBLE, peer.rank, 73,
-              m_grid.comm(), &requests.back());
+    round.receive(peer.rank, peer.recv.data(), peer.recv.size()); // k-th receive: m_peers[k]
   }
   for (const HaloPeer& peer : m_peers) {
     if (peer.shared) {
@@ -909,12 +893,9 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
       peer.send.resize(per * peer.velocity_face.size());
       peer.send.resize(pack(peer, peer.send.data()));
     }
-    requests.emplace_back();
-    MPI_Isend(peer.send.data(), static_cast<int>(peer.send.size()), MPI_DOUBLE, peer.rank, 73,
-              m_grid.comm(), &requests.back());
+    round.send(peer.rank, peer.send.data(), peer.send.size());
   }
-  std::vector<MPI_Status> statuses(requests.size());
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), statuses.data());
+  round.wait();
   std::atomic_thread_fence(std::memory_order_acquire);
   if (with_values)
     for (std::size_t k = 0; k < m_peers.size(); ++k) {
@@ -926,7 +907,7 @@ void LBFluid::exchange_coupling_ghosts(bool with_values) {
         received = static_cast<int>(in[0]);
         ++in;
       } else {
-        MPI_Get_count(&statuses[k], MPI_DOUBLE, &received);
+        received = static_cast<int>(round.received(k));
       }
       for (std::size_t j = 0; j + per <= static_cast<std::size_t>(received); j += per) {
         const std::size_t n = m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(in[j])]];

@@ -15,6 +15,7 @@
 // what both sides of a pair see alike, so no rank has to tell another what
 // it needs. Before queries, and after the particles, bonds or cuts changed,
 // all copies are made current (one allgather of each rank's particles).
+#include "communication/neighbour_exchange.hpp"
 #include "system/system.hpp"
 
 #include "utils/errors.hpp"
@@ -346,23 +347,19 @@ void System::resort_spread() {
       if (dest == me)
         arriving[r].push_back(i);
     }
-  std::vector<MPI_Request> requests;
-  for (int r = 0; r < size; ++r) {
-    if (arriving[r].empty())
-      continue;
-    from[r].resize(per * arriving[r].size());
-    requests.emplace_back();
-    MPI_Irecv(from[r].data(), static_cast<int>(from[r].size()), MPI_DOUBLE, r, 83, comm,
-              &requests.back());
+  {
+    NeighbourExchange round(comm, 83);
+    for (int r = 0; r < size; ++r) {
+      if (arriving[r].empty())
+        continue;
+      from[r].resize(per * arriving[r].size());
+      round.receive(r, from[r].data(), from[r].size());
+    }
+    for (int r = 0; r < size; ++r)
+      if (!to[r].empty())
+        round.send(r, to[r].data(), to[r].size());
+    round.wait();
   }
-  for (int r = 0; r < size; ++r) {
-    if (to[r].empty())
-      continue;
-    requests.emplace_back();
-    MPI_Isend(to[r].data(), static_cast<int>(to[r].size()), MPI_DOUBLE, r, 83, comm,
-              &requests.back());
-  }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (int r = 0; r < size; ++r)
     for (std::size_t k = 0; k < arriving[r].size(); ++k)
       unpack(from[r].data() + per * k, static_cast<std::size_t>(arriving[r][k]));
@@ -411,28 +408,26 @@ void System::resort_spread() {
   MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm);
   std::vector<std::vector<int>> in_index(size);
   std::vector<std::vector<double>> in(size);
-  requests.clear();
-  for (int r = 0; r < size; ++r) {
-    if (!recv_counts[r])
-      continue;
-    in_index[r].resize(recv_counts[r]);
-    in[r].resize(static_cast<std::size_t>(per) * recv_counts[r]);
-    requests.emplace_back();
-    MPI_Irecv(in_index[r].data(), recv_counts[r], MPI_INT, r, 84, comm, &requests.back());
-    requests.emplace_back();
-    MPI_Irecv(in[r].data(), static_cast<int>(in[r].size()), MPI_DOUBLE, r, 85, comm,
-              &requests.back());
+  {
+    // indices and states in two rounds of their own tags, in flight together
+    NeighbourExchange indices(comm, 84), states(comm, 85);
+    for (int r = 0; r < size; ++r) {
+      if (!recv_counts[r])
+        continue;
+      in_index[r].resize(recv_counts[r]);
+      in[r].resize(static_cast<std::size_t>(per) * recv_counts[r]);
+      indices.receive(r, in_index[r].data(), in_index[r].size());
+      states.receive(r, in[r].data(), in[r].size());
+    }
+    for (int r = 0; r < size; ++r) {
+      if (!send_counts[r])
+        continue;
+      indices.send(r, out_index[r].data(), out_index[r].size());
+      states.send(r, out[r].data(), out[r].size());
+    }
+    indices.wait();
+    states.wait();
   }
-  for (int r = 0; r < size; ++r) {
-    if (!send_counts[r])
-      continue;
-    requests.emplace_back();
-    MPI_Isend(out_index[r].data(), send_counts[r], MPI_INT, r, 84, comm, &requests.back());
-    requests.emplace_back();
-    MPI_Isend(out[r].data(), static_cast<int>(out[r].size()), MPI_DOUBLE, r, 85, comm,
-              &requests.back());
-  }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   m_spread.binned = m_spread.owned;
   for (int r = 0; r < size; ++r)
     for (std::size_t k = 0; k < in_index[r].size(); ++k) {
@@ -496,13 +491,10 @@ void System::resort_spread() {
 void System::exchange_current(bool normals) {
   auto& p = particles;
   const int per = normals ? 3 : 6;
-  std::vector<MPI_Request> requests;
-  requests.reserve(2 * m_spread.peers.size());
+  NeighbourExchange round(m_spread.comm.comm(), 81);
   for (auto& peer : m_spread.peers) {
     peer.recv_buffer.resize(per * peer.recv.size());
-    requests.emplace_back();
-    MPI_Irecv(peer.recv_buffer.data(), static_cast<int>(peer.recv_buffer.size()), MPI_DOUBLE,
-              peer.rank, 81, m_spread.comm.comm(), &requests.back());
+    round.receive(peer.rank, peer.recv_buffer.data(), peer.recv_buffer.size());
   }
   for (auto& peer : m_spread.peers) {
     peer.send_buffer.clear();
@@ -515,11 +507,9 @@ void System::exchange_current(bool normals) {
                                                          p.vel[i][0], p.vel[i][1], p.vel[i][2]});
       }
     }
-    requests.emplace_back();
-    MPI_Isend(peer.send_buffer.data(), static_cast<int>(peer.send_buffer.size()), MPI_DOUBLE,
-              peer.rank, 81, m_spread.comm.comm(), &requests.back());
+    round.send(peer.rank, peer.send_buffer.data(), peer.send_buffer.size());
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  round.wait();
   for (auto& peer : m_spread.peers)
     for (std::size_t k = 0; k < peer.recv.size(); ++k) {
       const double* v = peer.recv_buffer.data() + per * k;
@@ -540,22 +530,18 @@ void System::share_coupling_forces(std::vector<Vec3>& force, const std::vector<i
   // of the particle's giver: a copy, no sum. Fixed sizes (the lists), so a
   // rank whose computation failed still sends its share.
   const int me = m_spread.comm.rank();
-  std::vector<MPI_Request> requests;
+  NeighbourExchange round(m_spread.comm.comm(), 82);
   for (auto& peer : m_spread.peers) {
     peer.recv_buffer.resize(3 * peer.send.size());
-    requests.emplace_back();
-    MPI_Irecv(peer.recv_buffer.data(), static_cast<int>(peer.recv_buffer.size()), MPI_DOUBLE,
-              peer.rank, 82, m_spread.comm.comm(), &requests.back());
+    round.receive(peer.rank, peer.recv_buffer.data(), peer.recv_buffer.size());
   }
   for (auto& peer : m_spread.peers) {
     peer.send_buffer.clear();
     for (const int i : peer.recv)
       peer.send_buffer.insert(peer.send_buffer.end(), {force[i][0], force[i][1], force[i][2]});
-    requests.emplace_back();
-    MPI_Isend(peer.send_buffer.data(), static_cast<int>(peer.send_buffer.size()), MPI_DOUBLE,
-              peer.rank, 82, m_spread.comm.comm(), &requests.back());
+    round.send(peer.rank, peer.send_buffer.data(), peer.send_buffer.size());
   }
-  MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  round.wait();
   const std::vector<std::uint8_t>& owned = m_spread.owned;
   auto keep_own = [&](std::size_t i) {
     if (!owned[i] || giver[i] != me)
