@@ -7,6 +7,8 @@
 #include "shapes/cylinder.hpp"
 #include "shapes/wall.hpp"
 
+#include "mpi_gtest_main.hpp"
+
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -141,16 +143,5 @@ TEST(DomainGrid, ChoiceCutsAndOwners) {
 } // namespace pyoif
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank != 0) // one report
-    delete ::testing::UnitTest::GetInstance()->listeners().Release(
-        ::testing::UnitTest::GetInstance()->listeners().default_result_printer());
-  const int failed = RUN_ALL_TESTS();
-  int any = failed;
-  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return any;
+  return run_tests_under_mpi(argc, argv);
 }

@@ -5,6 +5,8 @@
 // and that a receive larger than its message reports the true count.
 #include "communication/neighbour_exchange.hpp"
 
+#include "mpi_gtest_main.hpp"
+
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -95,14 +97,5 @@ TEST(NeighbourExchange, LocalMessageWithoutItsReceiveIsRefused) {
 } // namespace pyoif
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (pyoif::rank_of(MPI_COMM_WORLD) != 0) // one report
-    delete ::testing::UnitTest::GetInstance()->listeners().Release(
-        ::testing::UnitTest::GetInstance()->listeners().default_result_printer());
-  const int failed = RUN_ALL_TESTS();
-  int any = failed;
-  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return any;
+  return run_tests_under_mpi(argc, argv);
 }
