@@ -21,13 +21,7 @@
 #include <type_traits>
 #include <utility>
 
-#if defined(__AVX512F__) && !defined(__clang__)
-#pragma GCC target("prefer-vector-width=512") // as lb_kernel.cpp, whose code this was
-#endif
-#if defined(__GNUC__) && !defined(__clang__)
-// the short copies of packing and scattering inline, not memcpy calls (lb_kernel.cpp)
-#pragma GCC optimize("no-tree-loop-distribute-patterns")
-#endif
+#include "lb/lattice_codegen.hpp" // last: it applies to this file's functions
 
 namespace pyoif::lb {
 

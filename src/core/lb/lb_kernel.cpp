@@ -38,15 +38,7 @@
 #include <type_traits>
 #include <utility>
 
-#if defined(__AVX512F__) && !defined(__clang__)
-// 8-wide vectors halve the instruction count of the collision (32 registers)
-#pragma GCC target("prefer-vector-width=512")
-#endif
-#if defined(__GNUC__) && !defined(__clang__)
-// keep the short per-population copies of the chunked kernel inline: a
-// memcpy call per population and chunk costs more than the copy itself
-#pragma GCC optimize("no-tree-loop-distribute-patterns")
-#endif
+#include "lb/lattice_codegen.hpp" // last: it applies to this file's functions
 
 namespace pyoif::lb {
 
