@@ -84,6 +84,9 @@ void System::add_membrane_forces(Energies* e) {
   membranes.shape_checks = m_checks_due && !e;
   membranes.step = static_cast<long long>(step_count);
   membranes.time_step = m_time_step; // the viscosity's implicit solve over one step
+  // the time step solves it after every other force (force_loop); energies
+  // and analysis leave it to the pass (no coupling there)
+  membranes.defer_implicit_viscosity = !e;
   membranes.add_forces(bonded, m_bonds_version, particles, box, time, owned_mask(),
                        m_spread.version);
   if (!e)
@@ -486,6 +489,10 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
       }
     }
     clock.lap(t.coupling);
+    // the implicit membrane viscosity against all of the step's forces
+    // (viscosity.hpp): the cell's owner holds them all by now
+    phase([&] { membranes.add_deferred_viscosity(p, box); });
+    clock.lap(t.membrane);
   }
   if (m_spread.active)
     raise_agreed(failure);

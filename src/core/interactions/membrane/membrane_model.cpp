@@ -375,8 +375,17 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
   m_model.drift_tolerance = drift_tolerance;
   m_model.step = step;
   m_model.time_step = time_step;
+  m_model.defer_implicit_viscosity = defer_implicit_viscosity;
   if (!m_model.empty())
     m_model.evaluate(p, box, time, p.force.data(), p.normal.data(), nullptr, counts);
+  counts.viscous_solves += std::exchange(m_model.viscous_solves, 0);
+  counts.viscous_iterations += std::exchange(m_model.viscous_iterations, 0);
+  counts.viscous_max_iterations =
+      std::max(counts.viscous_max_iterations, std::exchange(m_model.viscous_max_iterations, 0));
+}
+
+void Membranes::add_deferred_viscosity(ParticleStore& p, const BoxGeometry& box) {
+  m_model.add_deferred_viscosity(p, box, p.force.data());
   counts.viscous_solves += std::exchange(m_model.viscous_solves, 0);
   counts.viscous_iterations += std::exchange(m_model.viscous_iterations, 0);
   counts.viscous_max_iterations =

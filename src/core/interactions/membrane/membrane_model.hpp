@@ -166,6 +166,11 @@ public:
   /** Where not null, the viscous forces alone are also added here, per
    *  local index (analysis of the viscosity term). */
   Vec3* viscous_force = nullptr;
+  /** The time step's mode: evaluate() leaves out the implicit viscosity and
+   *  lists its cells; add_deferred_viscosity() adds it once every other
+   *  force of the step is in (viscosity.hpp). false: evaluate() solves it
+   *  against the membrane's own forces and the external ones (analysis). */
+  bool defer_implicit_viscosity = false;
   /** The viscous solves since the counters were last taken. */
   std::uint64_t viscous_solves = 0, viscous_iterations = 0;
   int viscous_max_iterations = 0;
@@ -184,6 +189,11 @@ public:
    *  (may be null) one CellReport per cell, in cells() order. */
   void evaluate(const ParticleStore& p, const BoxGeometry& box, double time, Vec3* force,
                 Vec3* normal, std::vector<CellReport>* reports, PassCounts& counts);
+  /** The implicit viscosity of the cells the last evaluate() deferred,
+   *  solved against force[local index] (all the step's forces on their
+   *  nodes: membrane, contacts, walls, thermostat, coupling, external) and
+   *  added to it. */
+  void add_deferred_viscosity(const ParticleStore& p, const BoxGeometry& box, Vec3* force);
 
 private:
   template <class T, bool with_reports>
@@ -213,6 +223,7 @@ private:
   std::vector<Cell> m_cells;
   std::vector<Group> m_groups;
   std::vector<int> m_node_index;   ///< cell node -> local particle index
+  std::vector<int> m_deferred;     ///< cells whose implicit viscosity waits (m_cells index)
   bool m_shared_nodes = false;     ///< a particle is a node of two cells (normals summed)
   std::vector<int> m_normal_nodes; ///< local indices that get a normal, each once
   /// per mol_id: bit 1 volume, 2 surface noted (kept across compiles)
@@ -249,6 +260,8 @@ public:
   double drift_tolerance = 0.05;
   long long step = -1;    ///< the MD step evaluated (for the notes)
   double time_step = 0.0; ///< of the viscous solve (Model::time_step)
+  /** Model::defer_implicit_viscosity for the time step (System sets it). */
+  bool defer_implicit_viscosity = false;
   /** The drift notes since the last call. */
   std::vector<DriftNote> take_drift_notes() { return std::exchange(m_model.drift_notes, {}); }
 
@@ -258,6 +271,9 @@ public:
   void add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t bonds_version,
                   ParticleStore& p, const BoxGeometry& box, double time,
                   const std::uint8_t* owned = nullptr, std::uint64_t owners_version = 0);
+  /** The step's implicit membrane viscosity, after every other force
+   *  (Model::add_deferred_viscosity); nothing unless add_forces deferred it. */
+  void add_deferred_viscosity(ParticleStore& p, const BoxGeometry& box);
   /** Drops the compiled model (the next call compiles again). */
   void invalidate() { m_key = Key{}; }
 

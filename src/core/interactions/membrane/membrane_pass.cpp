@@ -324,9 +324,14 @@ void Model::evaluate_group(const Group& group, const ParticleStore& p, const Box
   // (viscosity.hpp), in double whatever T (a cell's result does not depend
   // on the lanes it shares)
   if (t.visc)
-    for (int j = 0; j < group.n_cells; ++j)
+    for (int j = 0; j < group.n_cells; ++j) {
+      if (implicit_visc[j] && defer_implicit_viscosity && !viscous_force) {
+        m_deferred.push_back(group.cell[j]); // after the step's other forces
+        continue;
+      }
       if (implicit_visc[j] || viscous_force)
         add_viscous_forces(m_cells[group.cell[j]], j, p, x, v, f, implicit_visc[j]);
+    }
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d)
       bad |= not_finite(f[k].c[d]);
@@ -418,6 +423,47 @@ void Model::add_viscous_forces(const Cell& cell, int j, const ParticleStore& p, 
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d)
       set_lane(f[k].c[d], j, lane(f[k].c[d], j) + s.f[3 * k + d]);
+}
+
+void Model::add_deferred_viscosity(const ParticleStore& p, const BoxGeometry& box, Vec3* force) {
+  // each deferred cell alone, in double, in the order the pass met them
+  // (the same on every rank count: a cell is one rank's, its forces the
+  // serial sums); positions unfolded as the pass gathers them
+  using Node = Workspace<double>::Node;
+  std::vector<Node>& x = m_plain.x;
+  ViscousScratch& s = m_viscous_scratch;
+  for (const int c : m_deferred) {
+    const Cell& cell = m_cells[c];
+    const Topology& t = m_topologies[cell.topology];
+    const int n = t.n_nodes;
+    const int* const index = m_node_index.data() + cell.node_begin;
+    if (x.size() < static_cast<std::size_t>(n))
+      x.resize(n);
+    gather<Node>(cell, 0, p, box, x.data(), nullptr);
+    s.x.resize(3 * n);
+    s.v.resize(3 * n);
+    s.load.resize(3 * n);
+    s.mass.resize(n);
+    s.f.assign(3 * n, 0.0);
+    for (int k = 0; k < n; ++k) {
+      const int i = index[k];
+      for (int d = 0; d < 3; ++d) {
+        s.x[3 * k + d] = x[k].c[d];
+        s.v[3 * k + d] = p.vel[i][d];
+        s.load[3 * k + d] = force[i][d]; // every force of the step so far
+      }
+      s.mass[k] = p.mass[i];
+    }
+    m_viscous.add_forces(n, static_cast<int>(t.edge_b.size()), t.edge_b.data(), t.edge_c.data(),
+                         t.viscosity.data(), s.x.data(), s.v.data(), s.mass.data(), s.load.data(),
+                         time_step, s.f.data());
+    ++viscous_solves;
+    viscous_iterations += static_cast<std::uint64_t>(m_viscous.last_iterations);
+    viscous_max_iterations = std::max(viscous_max_iterations, m_viscous.last_iterations);
+    for (int k = 0; k < n; ++k)
+      force[index[k]] += Vec3(s.f[3 * k], s.f[3 * k + 1], s.f[3 * k + 2]);
+  }
+  m_deferred.clear();
 }
 
 template <class Node>
@@ -591,6 +637,7 @@ void Model::report_failure(const Group& group, int j, const ParticleStore& p, do
 
 void Model::evaluate(const ParticleStore& p, const BoxGeometry& box, double time, Vec3* force,
                      Vec3* normal, std::vector<CellReport>* reports, PassCounts& counts) {
+  m_deferred.clear();
   if (reports) {
     reports->assign(m_cells.size(), CellReport{});
     for (std::size_t c = 0; c < m_cells.size(); ++c)

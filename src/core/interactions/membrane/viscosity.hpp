@@ -23,13 +23,19 @@
 // C the dashpots' matrix (sum over edges of kvisc e e^T on the pair's
 // velocity difference), v the velocities the forces are computed with (the
 // integrator's half-step velocities), M the node masses and F the forces the
-// dashpots work against in this step: the membrane's elastic forces and the
-// external ones (semi-implicit Euler with implicit damping, as in cloth
-// simulation: D. Baraff, A. Witkin, SIGGRAPH 1998). Without F in it the
-// scheme would balance the elastic forces by M/dt instead of C wherever
-// dt C/m >> 1: a stretched cell then relaxed twice as fast as eta_m/mu at
-// dt 50 us, and faster at longer steps. The forces computed after the
-// membranes (contacts, coupling) stay explicit. Applied as the step's
+// dashpots work against in this step: in the time step every other force
+// of the step, solved last (Model::add_deferred_viscosity: membrane,
+// contacts, walls, thermostat, coupling, external), in analysis the
+// membrane's elastic forces and the external ones (semi-implicit Euler with
+// implicit damping, as in cloth simulation: D. Baraff, A. Witkin, SIGGRAPH
+// 1998). Without F in it the scheme would balance the elastic forces by M/dt
+// instead of C wherever dt C/m >> 1: a stretched cell then relaxed twice as
+// fast as eta_m/mu at dt 50 us, and faster at longer steps. A contact's push
+// left out of F (as it was until 29 Nov 2026, the contacts being computed
+// after the membranes) reached the node in full while the dashpots, solved
+// without it, held its neighbours: at kvisc 10 and 51 in a dense tube (D 10,
+// H_D 0.45, Ca 10) membranes crossed at strain 14 and 13; solved last, the
+// same runs went through 30 and 40 strain units. Applied as the step's
 // force, F_visc moves v + dt F/m to v_new over one step; at small
 // dt kvisc / m it is the explicit force -C v to first order. It is taken as
 // -C v_new, the dashpots' force at the new velocities: opposite forces along
