@@ -296,5 +296,47 @@ class TimeStepAndAnalysis(unittest.TestCase):
                 self.assertIn(str(edge.A.part_id), message)
 
 
+
+class ImplicitViscositySeesEveryForce(unittest.TestCase):
+    """The implicit membrane viscosity is solved last, against every force of
+    the step (doc/interactions.md): a contact's push on one node of a cell at
+    rest is shared at once with the node's neighbours, as stiff dashpots
+    should; solved inside the membrane pass, before the contacts, it let the
+    node take the whole push (the speed ratio was 1, and membranes crossed in
+    dense flow). The dashpots are internal forces: the forces on the cell's
+    nodes add up to the contact's alone, minus the obstacle's."""
+
+    def pushed(self, kvisc):
+        s = lbmd.System(box_l=[BOX, BOX, BOX])
+        s.time_step = 0.01
+        s.cell_system.skin = 0.3
+        rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(3.0, 3.0, 3.0), ks=0.05,
+                              kvisc=kvisc)
+        cell = oif.OifCell(cell_type=rbc, particle_type=0, origin=[12.0, 12.0, 12.0], particle_mass=1.0)
+        x = cell.particles.pos
+        k = int(np.argmax(x[:, 0]))  # the node farthest along +x, pushed back by a fixed particle
+        obstacle = s.part.add(pos=x[k] + [0.5, 0.0, 0.0], type=1, fix=[True, True, True])
+        s.non_bonded_inter[0, 1].soft_sphere.set_params(a=1.0, n=2.0, cutoff=1.0)
+        s.integrator.run(1)
+        v = cell.particles.v
+        unbalanced = cell.particles.f.sum(axis=0) + obstacle.f  # elastic and viscous forces: internal
+        return v[k], unbalanced / np.abs(obstacle.f).max(), s._core.membrane_counts()["viscous_solves"]
+
+    def test_a_push_is_shared_with_the_patch(self):
+        v_free, unbalanced_free, solves_free = self.pushed(0.0)
+        # dt kvisc_node / m = 0.01 * 6 * 1000: far beyond the explicit limit 1.5
+        v_stiff, unbalanced_stiff, solves_stiff = self.pushed(1000.0)
+        self.assertEqual(solves_free, 0)
+        self.assertGreater(solves_stiff, 0)  # the implicit solve ran
+        self.assertLess(v_free[0], -1e-3)  # the push, along -x
+        ratio = v_stiff[0] / v_free[0]
+        self.assertGreater(ratio, 0.0)
+        # measured 0.415: the dashpots resist along the edges only, and the
+        # push is along the normal at the cell's rim; solved before the
+        # contacts the ratio was 1 (no elastic force at rest, nothing to damp)
+        self.assertLess(ratio, 0.6, f"the pushed node kept {ratio:.3f} of its free speed")
+        for unbalanced in (unbalanced_free, unbalanced_stiff):
+            np.testing.assert_allclose(unbalanced, 0.0, atol=1e-12)
+
 if __name__ == "__main__":
     unittest.main()
