@@ -15,9 +15,6 @@ def is_writer():
         return True
 
 
-_is_writer = is_writer  # the engine's own name for it
-
-
 def on_writer(action):
     """Run action() on the writing rank only; an exception it raises is
     raised on every rank, so that all ranks of an SPMD script see the same

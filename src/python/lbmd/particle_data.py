@@ -377,7 +377,7 @@ class ParticleList:
         folded positions of the particles of the given types ('all', one
         type or a list of types), as vertices, with their velocities as point
         data 'velocity'. Written once under MPI (every rank calls)."""
-        from .file_output import _is_writer, write_text
+        from .file_output import is_writer, write_text
         owner = "system.part.writevtk"
         if not isinstance(fname, (str, os.PathLike)) or isinstance(fname, bytes):
             raise TypeError(f"{owner}: parameter 'fname' must be a file name, got {fname!r}")
@@ -393,7 +393,7 @@ class ParticleList:
         pos, vel = sel.pos_folded.reshape(-1, 3), sel.v.reshape(-1, 3)
         n = len(pos)
         text = ""
-        if _is_writer():
+        if is_writer():
             rows = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in pos.tolist())
             verts = "".join(f"1 {i}\n" for i in range(n))
             vels = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in vel.tolist())

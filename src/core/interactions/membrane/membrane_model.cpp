@@ -378,6 +378,10 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
   m_model.defer_implicit_viscosity = defer_implicit_viscosity;
   if (!m_model.empty())
     m_model.evaluate(p, box, time, p.force.data(), p.normal.data(), nullptr, counts);
+  take_viscous_counts();
+}
+
+void Membranes::take_viscous_counts() {
   counts.viscous_solves += std::exchange(m_model.viscous_solves, 0);
   counts.viscous_iterations += std::exchange(m_model.viscous_iterations, 0);
   counts.viscous_max_iterations =
@@ -386,10 +390,7 @@ void Membranes::add_forces(const std::vector<BondedEntry>& bonded, std::uint64_t
 
 void Membranes::add_deferred_viscosity(ParticleStore& p, const BoxGeometry& box) {
   m_model.add_deferred_viscosity(p, box, p.force.data());
-  counts.viscous_solves += std::exchange(m_model.viscous_solves, 0);
-  counts.viscous_iterations += std::exchange(m_model.viscous_iterations, 0);
-  counts.viscous_max_iterations =
-      std::max(counts.viscous_max_iterations, std::exchange(m_model.viscous_max_iterations, 0));
+  take_viscous_counts();
 }
 
 std::vector<CellReport> analyse(const std::vector<BondedEntry>& bonded, const Selection& select,

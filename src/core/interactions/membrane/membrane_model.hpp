@@ -210,6 +210,12 @@ private:
    *  dt kvisc_node_max / m (its lightest node) beyond
    *  explicit_viscosity_limit. */
   bool needs_implicit_viscosity(const Cell& cell, const ParticleStore& p) const;
+  /** The last viscous solve added to the counters. */
+  void count_viscous_solve() {
+    ++viscous_solves;
+    viscous_iterations += static_cast<std::uint64_t>(m_viscous.last_iterations);
+    viscous_max_iterations = std::max(viscous_max_iterations, m_viscous.last_iterations);
+  }
   template <class Node>
   void gather(const Cell& cell, int j, const ParticleStore& p, const BoxGeometry& box, Node* x,
               Node* v) const;
@@ -288,6 +294,8 @@ private:
   };
   Key m_key;
   Model m_model;
+  /** The model's viscous-solve counters moved into counts. */
+  void take_viscous_counts();
 };
 
 /** Analysis of the membrane bonds chosen by `select` (one interaction, one

@@ -417,9 +417,7 @@ void Model::add_viscous_forces(const Cell& cell, int j, const ParticleStore& p, 
       viscous_force[index[k]] += Vec3(s.f[3 * k], s.f[3 * k + 1], s.f[3 * k + 2]);
   if (!implicit)
     return;
-  ++viscous_solves;
-  viscous_iterations += static_cast<std::uint64_t>(m_viscous.last_iterations);
-  viscous_max_iterations = std::max(viscous_max_iterations, m_viscous.last_iterations);
+  count_viscous_solve();
   for (int k = 0; k < n; ++k)
     for (int d = 0; d < 3; ++d)
       set_lane(f[k].c[d], j, lane(f[k].c[d], j) + s.f[3 * k + d]);
@@ -457,9 +455,7 @@ void Model::add_deferred_viscosity(const ParticleStore& p, const BoxGeometry& bo
     m_viscous.add_forces(n, static_cast<int>(t.edge_b.size()), t.edge_b.data(), t.edge_c.data(),
                          t.viscosity.data(), s.x.data(), s.v.data(), s.mass.data(), s.load.data(),
                          time_step, s.f.data());
-    ++viscous_solves;
-    viscous_iterations += static_cast<std::uint64_t>(m_viscous.last_iterations);
-    viscous_max_iterations = std::max(viscous_max_iterations, m_viscous.last_iterations);
+    count_viscous_solve();
     for (int k = 0; k < n; ++k)
       force[index[k]] += Vec3(s.f[3 * k], s.f[3 * k + 1], s.f[3 * k + 2]);
   }
