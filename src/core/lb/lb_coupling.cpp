@@ -25,7 +25,7 @@ inline int wrap_node(int i, int n) {
   return i;
 }
 
-using CompactStencil = LBFluid::CouplingLedger::Stencil;
+using CompactStencil = CouplingStencil;
 
 [[noreturn]] __attribute__((noinline, cold)) void throw_bad_position(const Vec3& pos) {
   throw SimulationInstability(
@@ -151,7 +151,7 @@ namespace {
  *  made anew: then couple_on_this_rank clears the entries of the particles
  *  not listed, once, so that its passes need to look at the listed ones
  *  only. */
-bool list_current(LBFluid::CouplingLedger& ledger, const std::uint8_t* current, std::size_t n) {
+bool list_current(CouplingLedger& ledger, const std::uint8_t* current, std::size_t n) {
   if (ledger.current_mask.size() == n &&
       std::equal(current, current + n, ledger.current_mask.begin()))
     return false;
@@ -166,12 +166,12 @@ bool list_current(LBFluid::CouplingLedger& ledger, const std::uint8_t* current, 
 /** The coupling of the particles this rank computes (all, on one rank):
  *  their forces into the ledger's coupling_force (zero where not computed),
  *  their deposits into the fluid's force field. */
-void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
-                         const CouplingParams& params, std::uint64_t step, double time_step,
-                         const StencilFrame& frame, const std::vector<std::uint32_t>* listed,
-                         bool list_changed) {
+void couple_on_this_rank(LBFluid& fluid, CouplingLedger& ledger, ParticleStore& particles,
+                         const BoxGeometry& box, const CouplingParams& params, std::uint64_t step,
+                         double time_step, const StencilFrame& frame,
+                         const std::vector<std::uint32_t>* listed, bool list_changed) {
 
-  // see LBFluid::CouplingLedger: a new MD step deposits F dt; a first or a
+  // see CouplingLedger: a new MD step deposits F dt; a first or a
   // repeated computation for the same step deposits F dt / 2 after taking
   // back the in-flight half of the previous computation of this step
   auto& p = particles;
@@ -203,7 +203,6 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
   }
   const bool split = frame.any_split;
   auto mine = [&](std::size_t node) { return !split || !fluid.is_stencil_ghost(node); };
-  auto& ledger = fluid.coupling_ledger();
   const bool same_step = ledger.any && ledger.step == step;
   const double fraction = (ledger.any && !same_step) ? 1.0 : 0.5;
   // the force field is switched on (and read by the next update) only when
@@ -323,7 +322,7 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
       for (std::uint64_t bits = needed[word]; bits; bits &= bits - 1)
         node_list[j++] = 64 * word + static_cast<std::size_t>(__builtin_ctzll(bits));
   }
-  fluid.compute_coupling_velocities();
+  fluid.velocities_at(ledger);
   auto* const state = ledger.node_coupling.data();
   const double noise =
       params.kT > 0.0 ? std::sqrt(2.0 * params.gamma * params.kT / time_step) : 0.0;
@@ -378,9 +377,9 @@ void couple_on_this_rank(LBFluid& fluid, ParticleStore& particles, const BoxGeom
 
 } // namespace
 
-void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometry& box,
-                      const CouplingParams& params, std::uint64_t step, double time_step,
-                      const CouplingDistribution* distribution) {
+void couple_particles(LBFluid& fluid, CouplingLedger& ledger, ParticleStore& particles,
+                      const BoxGeometry& box, const CouplingParams& params, std::uint64_t step,
+                      double time_step, const CouplingDistribution* distribution) {
   if (params.gamma <= 0.0)
     return;
   fluid.require_flagged("the particle coupling"); // the flags and cuts the stencils use
@@ -393,7 +392,12 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   // velocities are sent sends none (its neighbours do not wait in vain).
   const StencilFrame frame(fluid);
   const bool split = frame.any_split;
-  auto& ledger = fluid.coupling_ledger();
+  // records of another lattice layout (a repartition) hold stale indices
+  if (ledger.lattice_generation != fluid.layout_generation()) {
+    ledger = CouplingLedger{};
+    ledger.lattice_generation = fluid.layout_generation();
+  }
+  fluid.note_coupling(); // (every rank: the load balance stops moving the cuts alike)
   // the ghost-layer velocities come from their owners in the velocity pass
   // (no particles, no stencil reads them: every rank stores every particle,
   // so all ranks skip that exchange alike)
@@ -407,10 +411,11 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   const bool list_changed = current && list_current(ledger, current, n);
   const std::vector<std::uint32_t>* listed = current ? &ledger.current_list : nullptr;
   try {
-    couple_on_this_rank(fluid, p, box, params, step, time_step, frame, listed, list_changed);
+    couple_on_this_rank(fluid, ledger, p, box, params, step, time_step, frame, listed,
+                        list_changed);
   } catch (...) {
     if (ledger.ghosts_pending) // the neighbours wait for this rank's ghost velocities
-      fluid.exchange_coupling_ghosts(false);
+      fluid.exchange_coupling_ghosts(ledger, false);
     if (distributed && n > 0) { // the other ranks wait for this one's part of the exchange
       ledger.coupling_force.assign(n, Vec3::Zero());
       ledger.giver.assign(n, -1);
@@ -440,6 +445,17 @@ void couple_particles(LBFluid& fluid, ParticleStore& particles, const BoxGeometr
   }
   ledger.in_flight = 0.5 * impulse_sum;
   ledger.in_flight_partial = distributed;
+}
+
+Vec3 CouplingLedger::in_flight_momentum(const LBFluid& fluid) const {
+  if (lattice_generation != fluid.layout_generation())
+    return Vec3::Zero(); // records of another layout: reset at the next pass, nothing in flight
+  Vec3 p = in_flight;
+  // every rank's share, or known whole on every rank (in_flight_partial is
+  // alike on every rank: the System passes a distribution on every rank)
+  if (fluid.distributed() && in_flight_partial)
+    MPI_Allreduce(MPI_IN_PLACE, p.data(), 3, MPI_DOUBLE, MPI_SUM, fluid.domain().comm());
+  return p;
 }
 
 } // namespace pyoif::lb

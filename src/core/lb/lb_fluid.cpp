@@ -200,7 +200,7 @@ void LBFluid::allocate_subdomain() {
   m_field.clear();
   m_field_valid.clear();
   m_field_used = false;
-  m_ledger = CouplingLedger{};
+  ++m_layout_generation;      // the coupling's padded indices are stale
   for (int q = 0; q < Q; ++q) // in memory order
     for (int z = 1; z <= m_n[2]; ++z)
       for (int y = 1; y <= m_n[1]; ++y)
@@ -477,7 +477,7 @@ void LBFluid::update_boundaries() {
   // Load balance: while no particle has coupled yet (the coupling's records
   // hold this rank's node indices), the cuts move so that every rank holds
   // about as many fluid nodes (the solid ones cost nothing in the update).
-  if (m_balance && m_grid.size() > 1 && !m_ledger.any) {
+  if (m_balance && m_grid.size() > 1 && !m_coupled) {
     std::array<std::vector<double>, 3> planes;
     for (int d = 0; d < 3; ++d)
       planes[d].assign(m_global[d], 0.0);
@@ -629,17 +629,17 @@ void LBFluid::open_impulse_field() {
   m_field_used = true;
 }
 
-void LBFluid::compute_coupling_velocities() {
+void LBFluid::velocities_at(CouplingNodes& list) {
   // The 19 populations of a node lie in 19 streams far apart; the hardware
   // prefetchers do not follow a sparse walk through them, so the node
   // `ahead` places down the list is requested while this one is summed.
   constexpr std::size_t ahead = 16;
   const std::ptrdiff_t* off = read_offset();
-  const std::size_t* nodes = m_ledger.node.data();
-  const std::size_t count = m_ledger.n_nodes;
-  m_ledger.node_coupling.resize(count);
-  auto* out = m_ledger.node_coupling.data();
-  const std::uint32_t* entry = m_ledger.compact.data();
+  const std::size_t* nodes = list.node.data();
+  const std::size_t count = list.n_nodes;
+  list.node_coupling.resize(count);
+  auto* out = list.node_coupling.data();
+  const std::uint32_t* entry = list.compact.data();
   // a fluid ghost's velocity comes from its owner: NaN until then, so that
   // a ghost the owner did not send could not pass unnoticed
   const Vec3 not_yet = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -654,8 +654,8 @@ void LBFluid::compute_coupling_velocities() {
       out[entry[n]] = {is_fluid_ghost(n) ? not_yet : velocity_at_index(n), Vec3::Zero()};
     }
   });
-  if (m_ledger.ghosts_pending)
-    exchange_coupling_ghosts(true);
+  if (list.ghosts_pending)
+    exchange_coupling_ghosts(list, true);
 }
 
 double LBFluid::total_mass() const {
@@ -698,14 +698,9 @@ Vec3 LBFluid::total_momentum() const {
               j[d] += m_field[3 * (r.start + i) + d];
     }
   });
-  Vec3 in_flight = m_ledger.in_flight;
-  if (m_grid.size() > 1) {
+  if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, j.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
-    // the coupling's: every rank's share, or known whole on every rank
-    if (m_ledger.in_flight_partial)
-      MPI_Allreduce(MPI_IN_PLACE, in_flight.data(), 3, MPI_DOUBLE, MPI_SUM, m_grid.comm());
-  }
-  return j * std::pow(m_p.agrid, 4) / m_p.tau - in_flight;
+  return j * std::pow(m_p.agrid, 4) / m_p.tau;
 }
 
 } // namespace pyoif::lb

@@ -53,6 +53,7 @@
 
 #include "communication/domain_grid.hpp"
 #include "communication/shared_segment.hpp"
+#include "lb/coupling_nodes.hpp"
 #include "lb/lb_lattice.hpp"
 #include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
@@ -190,11 +191,11 @@ public:
    *  update has failed: System::integrate calls it before anything moves. */
   void check_usable() const;
   /** Momentum of the populations plus the impulse accumulated in the force
-   *  field that the next update will apply (particle coupling), minus the
-   *  coupling impulse still in flight to the particles (CouplingLedger), MD
-   *  units. No half-force term: a uniform ext_force_density raises it by
-   *  exactly F V tau per update, and particle + fluid momentum is conserved
-   *  to round-off. */
+   *  field that the next update will apply (particle coupling), MD units.
+   *  The coupling's impulse still in flight to the particles is the
+   *  coupling's to subtract (System::fluid_momentum). No half-force term: a uniform
+   * ext_force_density raises it by exactly F V tau per update, and particle + fluid momentum is
+   * conserved to round-off. */
   Vec3 total_momentum() const;
   double total_mass() const;
 
@@ -352,107 +353,22 @@ public:
   }
   /** Requests the field line of padded index n (a later add_field_impulse). */
   void prefetch_field(std::size_t n) const { __builtin_prefetch(m_field.data() + 3 * n, 1, 3); }
-  /** Bookkeeping of the particle coupling under velocity Verlet: an MD step's
-   *  coupling force F_n acts on the particles in two half kicks (dt/2 at the
-   *  end of step n, dt/2 at the start of step n+1) but goes to the fluid at
-   *  once (F_n dt). Half of the last deposit is thus "in flight": not yet
-   *  received by the particles. A force recomputation without a time step
-   *  (same MD step) replaces that half; the first computation deposits only
-   *  that half. total_momentum() excludes the in-flight half, so particle +
-   *  fluid momentum is conserved to round-off at every step. */
-  struct CouplingLedger {
-    bool any = false;
-    std::uint64_t step = 0;
-    /// how much the last call deposited (full impulse per particle, spread
-    /// with that call's stencils, still in `stencils`)
-    std::vector<Vec3> last_impulse;
-    Vec3 in_flight = Vec3::Zero(); ///< impulse deposited, not yet on particles
-    /// in_flight is this rank's share (particles spread over the ranks)
-    bool in_flight_partial = false;
-    /// The stencil of a particle as its first node (lowest index on every
-    /// axis), per axis whether the second node lies across the box's
-    /// periodic edge, and the fraction towards it: node m = (dx, dy, dz)
-    /// (m = dx + 2 dy + 4 dz) is base + the steps of the axes with d = 1
-    /// (StencilSteps: the lattice stride, or less the period where the
-    /// stencil wraps round the box), its weight the product of
-    /// (d ? frac : 1 - frac) over the axes. key = base << 3 | wrap bits: one
-    /// comparison tells a stencil that moved; 32 bytes, read and written for
-    /// every coupled particle and step.
-    struct Stencil {
-      std::uint64_t key;
-      double frac[3];
-      std::size_t base() const { return static_cast<std::size_t>(key >> 3); }
-      double weight(int m) const {
-        return ((m & 1) ? frac[0] : 1.0 - frac[0]) * ((m & 2) ? frac[1] : 1.0 - frac[1]) *
-               ((m & 4) ? frac[2] : 1.0 - frac[2]);
-      }
-    };
-    /// Per axis the index step from a stencil's first to its second node:
-    /// the lattice stride, or the stride less the period (wrapped).
-    struct StencilSteps {
-      std::ptrdiff_t plain[3], wrapped[3];
-      std::size_t node(const Stencil& s, int m) const {
-        std::ptrdiff_t n = static_cast<std::ptrdiff_t>(s.base());
-        for (int d = 0; d < 3; ++d)
-          if ((m >> d) & 1)
-            n += ((s.key >> d) & 1) ? wrapped[d] : plain[d];
-        return static_cast<std::size_t>(n);
-      }
-    };
-    /// The lattice nodes of the coupling passes since the last renumbering:
-    /// marked in `needed` (one bit per padded node), numbered in the order
-    /// the particles' stencils first touched them (compact[n], stale for
-    /// unmarked nodes, which are never looked up), listed in `node` by
-    /// number (see couple_particles).
-    /// Each lattice node serves several membrane nodes, and its 19
-    /// populations lie in 19 different streams, so its velocity is computed
-    /// once per pass, in memory order, into its compact entry.
-    std::vector<std::uint64_t> needed;
-    std::vector<std::uint32_t> compact;
-    std::vector<std::size_t> node; ///< the first n_nodes are the list (the rest: room)
-    std::size_t n_nodes = 0;
-    struct NodeCoupling {
-      Vec3 velocity; ///< of the fluid at the node, MD units
-      Vec3 impulse;  ///< this pass's deposit, field units (see add_field_impulse)
-    };
-    std::vector<NodeCoupling> node_coupling;
-    std::uint64_t layout_version = 0, numbered_step = 0; ///< of the last renumbering
-    std::vector<Stencil> stencils;                       ///< per particle of the current pass
-    /// decomposed lattice: per particle the rank of its stencil's first
-    /// node, which gives the particle its force (CouplingDistribution)
-    std::vector<int> giver;
-    std::vector<Vec3> coupling_force;           ///< per particle, this pass
-    std::vector<std::uint32_t> stencil_entries; ///< compact entries, 8 per particle
-    /// decomposed lattice: the particles this rank keeps current (their
-    /// indices, ascending) and the mask the list was made from; the others'
-    /// stencils are marked not here, their givers -1, forces and impulses 0
-    std::vector<std::uint32_t> current_list;
-    std::vector<std::uint8_t> current_mask;
-    /// decomposed lattice: this pass still owes its neighbours their
-    /// ghost-layer velocities (compute_coupling_velocities sends them; a
-    /// pass that failed before sends none, so that no rank waits)
-    bool ghosts_pending = false;
-  };
-  CouplingLedger& coupling_ledger() {
-    require_flagged("the particle coupling"); // a flagging moves the cuts, resetting the ledger
-    return m_ledger;
-  }
-  /** The coupling stencils' steps (CouplingLedger::StencilSteps). */
-  CouplingLedger::StencilSteps stencil_steps() const {
-    CouplingLedger::StencilSteps st;
+  /** The coupling stencils' steps (StencilSteps). */
+  StencilSteps stencil_steps() const {
+    StencilSteps st;
     for (int d = 0; d < 3; ++d) {
       st.plain[d] = padded_axis_stride(d);
       st.wrapped[d] = padded_axis_stride(d) * (1 - m_n[d]); // undecomposed axes only
     }
     return st;
   }
-  /** For each node n of the ledger's list (`node`, mostly in increasing
-   *  index order): node_coupling[compact[n]] = {velocity_at_index(n), 0},
-   *  with the populations of nodes further down the list prefetched. On a
-   *  decomposed lattice the fluid ghost nodes of the list take their
-   *  velocities from their owners instead (collective while the ledger's
-   *  ghosts_pending: exchange_coupling_ghosts). */
-  void compute_coupling_velocities();
+  /** Velocity-at for a coupling pass: for each node n of the list (`node`,
+   *  mostly in increasing index order): node_coupling[compact[n]] =
+   *  {velocity_at_index(n), 0}, with the populations of nodes further down
+   *  the list prefetched. On a decomposed lattice the fluid ghost nodes of
+   *  the list take their velocities from their owners instead (collective
+   *  while ghosts_pending: exchange_coupling_ghosts). */
+  void velocities_at(CouplingNodes& nodes);
   /** Collective, once per coupling pass on a decomposed lattice: sends each
    *  neighbour the velocities of this rank's face nodes that its own list
    *  holds (with_values; else nothing, for a pass that failed) and writes
@@ -461,7 +377,14 @@ public:
    *  owner's subdomain, so the owner keeps the particle current and lists
    *  the node too: the owner's list covers every ghost the neighbour reads,
    *  and no node list needs to be agreed on beforehand. */
-  void exchange_coupling_ghosts(bool with_values);
+  void exchange_coupling_ghosts(CouplingNodes& nodes, bool with_values);
+  /** Changes whenever the subdomain is laid out anew (construction, a
+   *  repartition): padded indices the coupling holds are stale then. */
+  std::uint64_t layout_generation() const { return m_layout_generation; }
+  /** The coupling tells the lattice (every rank, every pass) that its
+   *  records now hold this rank's node indices: the load balance no longer
+   *  moves the cuts (a pass's in-flight deposit could not be taken back). */
+  void note_coupling() { m_coupled = true; }
 
   // --- output -----------------------------------------------------------------
   /** Collective: rank 0 writes; an error there is raised on every rank. */
@@ -734,7 +657,8 @@ private:
   /// the message of the update that found a bad node (empty: none); that
   /// update was abandoned half done, so the fluid takes no more updates
   std::string m_failed_update;
-  CouplingLedger m_ledger;
+  std::uint64_t m_layout_generation = 0;
+  bool m_coupled = false; ///< see note_coupling
   int m_threads = 1;
 };
 

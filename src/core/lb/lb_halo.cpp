@@ -373,14 +373,14 @@ void LBFluid::refresh_ghost_velocities() {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void LBFluid::exchange_coupling_ghosts(bool with_values) {
-  m_ledger.ghosts_pending = false;
+void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
+  list.ghosts_pending = false;
   if (m_peers.empty())
     return;
   const auto start = std::chrono::steady_clock::now();
-  const std::uint64_t* needed = m_ledger.needed.data();
-  const std::uint32_t* entry = m_ledger.compact.data();
-  auto* state = m_ledger.node_coupling.data();
+  const std::uint64_t* needed = list.needed.data();
+  const std::uint32_t* entry = list.compact.data();
+  auto* state = list.node_coupling.data();
   auto listed = [needed](std::size_t n) { return ((needed[n >> 6] >> (n & 63)) & 1) != 0; };
   // per node sent: its place in the peer's velocity list, then the velocity
   // (4 doubles; the place is exact in a double). A neighbour on this machine

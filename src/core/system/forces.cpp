@@ -478,14 +478,15 @@ void System::force_loop(Energies* e, bool forces_preset, RunTimings* timings) {
               share_coupling_forces(f, giver, listed);
             }};
         try { // every rank takes part, a failed one too (see couple_particles)
-          lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step,
-                               &spread);
+          lb::couple_particles(*m_lb, m_lb_coupling.ledger, p, box, m_lb_coupling.params,
+                               step_count, m_time_step, &spread);
         } catch (...) {
           if (!failure)
             failure = std::current_exception();
         }
       } else {
-        lb::couple_particles(*m_lb, p, box, m_lb_coupling.params, step_count, m_time_step);
+        lb::couple_particles(*m_lb, m_lb_coupling.ledger, p, box, m_lb_coupling.params, step_count,
+                             m_time_step);
       }
     }
     clock.lap(t.coupling);

@@ -183,6 +183,7 @@ void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
     fluid->validate(box, m_time_step);
   synchronize(); // every copy current before the particles' spread changes
   m_lb = std::move(fluid);
+  m_lb_coupling.ledger = lb::CouplingLedger{}; // its records are the old fluid's
   update_spread();
   if (!m_lb)
     m_lb_coupling.active = false;
@@ -190,12 +191,19 @@ void System::set_lb(std::shared_ptr<lb::LBFluid> fluid) {
   invalidate_forces();
 }
 
+Vec3 System::fluid_momentum() const {
+  if (!m_lb)
+    return Vec3::Zero();
+  return m_lb->total_momentum() - m_lb_coupling.ledger.in_flight_momentum(*m_lb);
+}
+
 void System::set_lb_coupling(double gamma, std::uint64_t seed) {
   if (!m_lb)
     throw InputError("set_lb_coupling: no lattice-Boltzmann fluid is active");
   if (!(gamma >= 0.0) || !std::isfinite(gamma))
     throw InputError("gamma must be a finite number >= 0");
-  m_lb_coupling = {true, {gamma, m_lb->params().kT, seed}};
+  m_lb_coupling.active = true; // (the ledger stays: a deposit may be in flight)
+  m_lb_coupling.params = {gamma, m_lb->params().kT, seed};
   invalidate_forces();
 }
 

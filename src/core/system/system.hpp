@@ -34,6 +34,8 @@ struct LangevinParams {
 struct LBCouplingState {
   bool active = false;
   lb::CouplingParams params;
+  /// the coupling's records between passes (reset with a new fluid)
+  lb::CouplingLedger ledger;
 };
 
 struct Energies {
@@ -145,6 +147,8 @@ public:
     invalidate_forces();
   }
   const LBCouplingState& lb_coupling() const { return m_lb_coupling; }
+  /** The coupling's records, for checkpoints to restore. */
+  lb::CouplingLedger& lb_coupling_ledger() { return m_lb_coupling.ledger; }
   /** Couples the particles to the fluid (kT is the fluid's). Throws
    *  InputError without a fluid or for a bad gamma. */
   void set_lb_coupling(double gamma, std::uint64_t seed);
@@ -154,6 +158,11 @@ public:
   }
   /** The lattice-Boltzmann fluid, null without one. */
   const std::shared_ptr<lb::LBFluid>& fluid() const { return m_lb; }
+  /** Collective: the fluid's momentum less the coupling impulse still in
+   *  flight to the particles (CouplingLedger), so that particle + fluid
+   *  momentum is conserved to round-off at every step; zero without a
+   *  fluid. */
+  Vec3 fluid_momentum() const;
   /** Sets or (null) removes the fluid; removing it switches the coupling off. */
   void set_lb(std::shared_ptr<lb::LBFluid> fluid);
 

@@ -97,33 +97,37 @@ void bind_checkpoint(py::module_& m) {
           },
           py::arg("folded_pos"), py::arg("image"), py::arg("force"), py::arg("normal"),
           py::arg("reference"), py::arg("lb_substep"), py::arg("forces_valid") = true)
-      .def_property_readonly("forces_valid", &System::forces_valid);
-
-  auto fluid = py::reinterpret_borrow<py::class_<lb::LBFluid, std::shared_ptr<lb::LBFluid>>>(
-      m.attr("LBFluid"));
-  fluid.def("set_n_updates", &lb::LBFluid::set_n_updates)
+      .def_property_readonly("forces_valid", &System::forces_valid)
       .def("coupling_ledger_state",
-           [](lb::LBFluid& f) {
+           [](System& s) {
              // (any, step, in_flight summed over the ranks)
-             auto& l = f.coupling_ledger();
-             Vec3 in_flight = l.in_flight;
-             if (f.distributed() && l.in_flight_partial)
-               MPI_Allreduce(MPI_IN_PLACE, in_flight.data(), 3, MPI_DOUBLE, MPI_SUM,
-                             f.domain().comm());
+             const auto& l = s.lb_coupling().ledger;
+             Vec3 in_flight = s.fluid() ? l.in_flight_momentum(*s.fluid()) : Vec3::Zero();
              return py::make_tuple(l.any, l.step,
                                    py::make_tuple(in_flight[0], in_flight[1], in_flight[2]));
            })
       .def("set_coupling_ledger_state",
-           [](lb::LBFluid& f, bool any, std::uint64_t step, const Vec3& in_flight) {
+           [](System& s, bool any, std::uint64_t step, const Vec3& in_flight) {
+             if (!s.fluid())
+               throw InputError("set_coupling_ledger_state: no lattice-Boltzmann fluid is active");
+             lb::LBFluid& f = *s.fluid();
+             f.require_flagged("the coupling's records");
              // the whole in-flight impulse on the first rank, a share elsewhere
-             auto& l = f.coupling_ledger();
+             lb::CouplingLedger& l = s.lb_coupling_ledger();
+             l = lb::CouplingLedger{};
+             l.lattice_generation = f.layout_generation();
              l.any = any;
              l.step = step;
              const bool first = !f.distributed() || f.domain().rank() == 0;
              l.in_flight = first ? in_flight : Vec3::Zero();
              l.in_flight_partial = f.distributed();
-             l.last_impulse.clear();
+             if (any)
+               f.note_coupling(); // as after the run it continues
            });
+
+  auto fluid = py::reinterpret_borrow<py::class_<lb::LBFluid, std::shared_ptr<lb::LBFluid>>>(
+      m.attr("LBFluid"));
+  fluid.def("set_n_updates", &lb::LBFluid::set_n_updates);
 }
 
 } // namespace pyoif::python

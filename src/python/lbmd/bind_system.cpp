@@ -549,9 +549,7 @@ void bind_system(py::module_& m) {
              return d;
            })
       .def("particle_momentum", &System::particle_momentum)
-      .def("fluid_momentum", [](const System& s) -> Vec3 {
-        return s.fluid() ? s.fluid()->total_momentum() : Vec3::Zero();
-      });
+      .def("fluid_momentum", &System::fluid_momentum);
 }
 
 } // namespace pyoif::python

@@ -105,7 +105,7 @@ def system_state(system):
         for prop in ("stored_population", "coupling_field"):
             block = np.asarray(fluid.get_block(prop, [0, 0, 0], list(shape)))
             arrays[f"{prefix}/fluid/{prop}"] = block.reshape(shape + (-1,))
-        any_deposit, ledger_step, in_flight = fluid.coupling_ledger_state()
+        any_deposit, ledger_step, in_flight = core.coupling_ledger_state()
         fluid_state = {"n_updates": int(fluid.n_updates), "ledger": (bool(any_deposit), int(ledger_step),
                                                                      tuple(in_flight)),
                        "open_gains": list(fluid.open_boundary_gains())}
@@ -195,7 +195,7 @@ def restore_system(system, state):
         if gains and len(gains) == len(fluid.open_boundary_gains()):
             fluid.set_open_boundary_gains(gains)
         any_deposit, ledger_step, in_flight = saved["fluid"]["ledger"]
-        fluid.set_coupling_ledger_state(any_deposit, ledger_step, np.asarray(in_flight, dtype=float))
+        core.set_coupling_ledger_state(any_deposit, ledger_step, np.asarray(in_flight, dtype=float))
     core.time = saved["time"]
     core.set_step_count(saved["step_count"])
     core.restore_run_state(part["folded_pos"], part["image"].astype(np.int32), part["f"], part["normal"],

@@ -143,8 +143,10 @@ class LBFluid(ParameterObject):
         return self._collective_core().total_mass()
 
     def total_momentum(self):
-        """Momentum of the fluid (see doc/lb.md for the half-force convention)."""
-        return np.asarray(self._collective_core().total_momentum())
+        """Momentum of the fluid (see doc/lb.md for the half-force convention):
+        the coupling's impulse still in flight to the particles excluded."""
+        self._collective_core()
+        return np.asarray(self._system._core.fluid_momentum())
 
     def get_interpolated_velocity(self, pos):
         """Fluid velocity at pos, trilinear in the 8 surrounding nodes."""
