@@ -23,16 +23,6 @@ using namespace d3q19;
 
 namespace {
 
-/** n zeroed values of `size` bytes each, 64-byte aligned. */
-void* allocate(std::size_t n, std::size_t size) {
-  const std::size_t bytes = ((n * size + 63) / 64) * 64;
-  void* p = std::aligned_alloc(64, bytes);
-  if (!p)
-    throw std::bad_alloc();
-  std::memset(p, 0, bytes);
-  return p;
-}
-
 /** lambda = 1 - omega, with omega checked to lie in (0, 2). */
 double lambda_of(double omega, const std::string& what) {
   require(std::isfinite(omega) && omega > 0.0 && omega < 2.0,
@@ -188,14 +178,7 @@ void LBFluid::allocate_subdomain() {
   for (int q = 0; q < Q; ++q)
     m_offset[q] = (static_cast<std::ptrdiff_t>(c[q][2]) * m_pad[1] + c[q][1]) * m_pad[0] + c[q][0];
   const std::size_t nodes = static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2];
-  m_stride = ((nodes + 7) / 8) * 8;
-  std::free(m_f);
-  m_f = allocate(Q * m_stride, population_bytes());
-  for (int q = 0; q < Q; ++q) {
-    m_read_normal[q] = static_cast<std::ptrdiff_t>(q * m_stride);
-    m_read_swapped[q] = static_cast<std::ptrdiff_t>(opposite(q) * m_stride) - m_offset[q];
-  }
-  m_swapped = false;
+  m_pop.allocate(nodes, m_offset, m_p.single_precision, m_p.density);
   m_flag.assign(nodes, 0);
   m_field.clear();
   m_field_valid.clear();
@@ -205,7 +188,7 @@ void LBFluid::allocate_subdomain() {
     for (int z = 1; z <= m_n[2]; ++z)
       for (int y = 1; y <= m_n[1]; ++y)
         for (int x = 1; x <= m_n[0]; ++x)
-          set_full_population(q, q * m_stride + index(x, y, z), w[q] * m_p.density);
+          m_pop.set_full(q, q * m_pop.stride() + index(x, y, z), w[q] * m_p.density);
 }
 
 std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& boundaries) const {
@@ -313,7 +296,7 @@ void LBFluid::repartition(const DomainGrid& old_grid) {
           for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
             const std::size_t i = old_index(Vec3i(x, y, z));
             for (int q = 0; q < Q; ++q)
-              send.push_back(population_at(q * m_stride + i));
+              send.push_back(m_pop.at(q * m_pop.stride() + i));
           }
     send_counts[r] = static_cast<int>(send.size()) - send_displs[r];
   }
@@ -341,7 +324,7 @@ void LBFluid::repartition(const DomainGrid& old_grid) {
         for (int x = lo[0]; x < lo[0] + n[0]; ++x) {
           const std::size_t i = domain_index(Vec3i(x, y, z));
           for (int q = 0; q < Q; ++q)
-            set_population_at(q * m_stride + i, recv[k++]);
+            m_pop.set_at(q * m_pop.stride() + i, recv[k++]);
         }
   }
 }
@@ -360,28 +343,12 @@ std::size_t LBFluid::owned_index(const Vec3i& node) const {
   return index(node[0] - m_origin[0] + 1, node[1] - m_origin[1] + 1, node[2] - m_origin[2] + 1);
 }
 
-LBFluid::~LBFluid() {
-  std::free(m_f);
-}
-
 void LBFluid::normalize_layout() {
-  if (!m_swapped)
-    return;
-  // pre-collision populations of every fluid node, gathered from their
-  // swapped places, then written back at (q, node); solid nodes hold none
-  std::vector<double> gathered(Q * m_n_fluid);
-  std::size_t k = 0;
-  for (const Run& r : m_runs)
-    for (int i = 0; i < r.length; ++i, ++k)
-      for (int q = 0; q < Q; ++q)
-        gathered[Q * k + q] = population_at(population_slot(q, r.start + i));
-  m_swapped = false;
-  std::memset(m_f, 0, Q * m_stride * population_bytes()); // 0.0 in either type
-  k = 0;
-  for (const Run& r : m_runs)
-    for (int i = 0; i < r.length; ++i, ++k)
-      for (int q = 0; q < Q; ++q)
-        set_population_at(population_slot(q, r.start + i), gathered[Q * k + q]);
+  m_pop.normalize([this](auto&& body) {
+    for (const Run& r : m_runs)
+      for (int i = 0; i < r.length; ++i)
+        body(r.start + i);
+  });
 }
 
 void LBFluid::set_n_threads(int n) {
@@ -514,10 +481,10 @@ void LBFluid::update_boundaries() {
         const std::size_t n = index(x, y, z);
         if (old_flag[n] != 0 && m_flag[n] == 0)
           for (int q = 0; q < Q; ++q)
-            set_full_population(q, q * m_stride + n, w[q] * m_p.density);
+            m_pop.set_full(q, q * m_pop.stride() + n, w[q] * m_p.density);
         if (m_flag[n] != 0)
           for (int q = 0; q < Q; ++q)
-            set_population_at(q * m_stride + n, 0.0);
+            m_pop.set_at(q * m_pop.stride() + n, 0.0);
         // Coupling impulses waiting for the next update (a run that stopped
         // between updates, tau > time_step) stay with the nodes that remain
         // fluid; on a node turned solid they are dropped (the wall takes
@@ -564,7 +531,8 @@ void LBFluid::rebuild_geometry() {
     }
   std::vector<PlaceRun> links;
   for (const Link& l : m_links)
-    links.push_back({l.q * m_stride + l.solid, opposite(l.q) * m_stride + l.node, 1, l.wall_term});
+    links.push_back(
+        {l.q * m_pop.stride() + l.solid, opposite(l.q) * m_pop.stride() + l.node, 1, l.wall_term});
   m_bounce_back = merge_runs(std::move(links));
   long counts[2] = {static_cast<long>(m_n_fluid), static_cast<long>(m_links.size())};
   if (m_grid.size() > 1)
@@ -611,7 +579,7 @@ Vec3 LBFluid::boundary_force(int b) const {
   for (const Link& l : m_links) {
     if (l.boundary != b)
       continue;
-    const double back = full_population(opposite(l.q), population_slot(opposite(l.q), l.node));
+    const double back = m_pop.full(opposite(l.q), m_pop.slot(opposite(l.q), l.node));
     const double transfer = 2.0 * back + l.wall_term;
     for (int d = 0; d < 3; ++d)
       sum[d] += c[l.q][d] * transfer;
@@ -623,8 +591,8 @@ Vec3 LBFluid::boundary_force(int b) const {
 
 void LBFluid::open_impulse_field() {
   if (m_field.empty()) {
-    m_field.assign(3 * m_stride, 0.0);
-    m_field_valid.assign((m_stride >> 6) + 2, 0); // + 1 spare: field_valid_bits32
+    m_field.assign(3 * m_pop.stride(), 0.0);
+    m_field_valid.assign((m_pop.stride() >> 6) + 2, 0); // + 1 spare: field_valid_bits32
   }
   m_field_used = true;
 }
@@ -634,7 +602,7 @@ void LBFluid::velocities_at(CouplingNodes& list) {
   // prefetchers do not follow a sparse walk through them, so the node
   // `ahead` places down the list is requested while this one is summed.
   constexpr std::size_t ahead = 16;
-  const std::ptrdiff_t* off = read_offset();
+  const std::ptrdiff_t* off = m_pop.read_offset();
   const std::size_t* nodes = list.node.data();
   const std::size_t count = list.n_nodes;
   list.node_coupling.resize(count);
@@ -643,7 +611,7 @@ void LBFluid::velocities_at(CouplingNodes& list) {
   // a fluid ghost's velocity comes from its owner: NaN until then, so that
   // a ghost the owner did not send could not pass unnoticed
   const Vec3 not_yet = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  with_populations([&](const auto* populations) {
+  m_pop.visit([&](const auto* populations) {
     for (std::size_t i = 0; i < count; ++i) {
       if (i + ahead < count) {
         const auto* f = populations + nodes[i + ahead];
@@ -661,10 +629,10 @@ void LBFluid::velocities_at(CouplingNodes& list) {
 double LBFluid::total_mass() const {
   require_flagged("the fluid's total mass");
   double mass = 0.0; // summed in double in either precision
-  with_populations([&](const auto* populations) {
+  m_pop.visit([&](const auto* populations) {
     for (const Run& r : m_runs)
       for (int q = 0; q < Q; ++q) {
-        const auto* f = populations + population_slot(q, r.start);
+        const auto* f = populations + m_pop.slot(q, r.start);
         for (int i = 0; i < r.length; ++i)
           mass += f[i];
       }
@@ -681,10 +649,10 @@ double LBFluid::total_mass() const {
 Vec3 LBFluid::total_momentum() const {
   require_flagged("the fluid's total momentum");
   Vec3 j = Vec3::Zero();
-  with_populations([&](const auto* populations) {
+  m_pop.visit([&](const auto* populations) {
     for (const Run& r : m_runs) {
       for (int q = 1; q < Q; ++q) {
-        const auto* f = populations + population_slot(q, r.start);
+        const auto* f = populations + m_pop.slot(q, r.start);
         double s = 0.0;
         for (int i = 0; i < r.length; ++i)
           s += f[i];

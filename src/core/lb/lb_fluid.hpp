@@ -1,22 +1,11 @@
 // Lattice-Boltzmann D3Q19 fluid on a cubic lattice with one ghost (halo) layer.
 //
-// Storage: structure of arrays, population q of padded node n at
-// f[q * stride + n], padded node index n = (z * Py + y) * Px + x with
-// x, y, z in [0, N + 1] (0 and N + 1 are the ghost layer; the lattice node
-// (i, j, k) of the domain is padded node (i + 1, j + 1, k + 1) and sits at
-// position ((i, j, k) + 1/2) * agrid).
-//
-// One lattice, updated in place with the AA access pattern (Bailey, Myre,
-// Walsh, Lilja & Saar, ICPP 2009): every node reads and writes the same 19
-// memory places within one update, so there is no second lattice and no
-// write-allocate traffic, and nodes never race under OpenMP.
-//   even update: read f_q at the node itself, collide, write f*_q into the
-//     node's own slot of the opposite direction -q ("swapped" state);
-//   odd update: read the incoming f_q from slot -q of node x - c_q, collide,
-//     push f*_q into slot q of node x + c_q ("normal" state again).
-// In the normal state the pre-collision f_q of node x is at (q, x); in the
-// swapped state it is at (-q, x - c_q), see population_slot(). Every node
-// access goes through population_slot(), so users never see the difference.
+// Padded node index n = (z * Py + y) * Px + x with x, y, z in [0, N + 1]
+// (0 and N + 1 are the ghost layer; the lattice node (i, j, k) of the
+// domain is padded node (i + 1, j + 1, k + 1) and sits at position
+// ((i, j, k) + 1/2) * agrid). The populations, their in-place (AA) update
+// parity and their precision are PopulationStorage's
+// (population_storage.hpp); every node access goes through m_pop.slot().
 // After an even update the ghost layer is filled from the periodic images
 // (the odd update reads it); after an odd update what was pushed into the
 // ghost layer is folded back into the domain. Halfway bounce-back on the
@@ -34,17 +23,9 @@
 // is bit for bit the serial one. Node (i, j, k) below is always the global
 // lattice node; padded indices are this rank's.
 //
-// Precision: the populations are stored as double, or as float when
-// single_precision (LBParams). Every function that touches them is a
-// template on the stored type (Real), chosen once per call, outside the
-// node loops. In single precision the array holds the deviations
-// g_q = f_q - w_q rho0 from the rest state at the reference density rho0 =
-// `dens` (Skordos, Phys. Rev. E 48, 4823 (1993)): a fluid near rest stores
-// values near 0, so float keeps ~7 digits of the small non-equilibrium parts
-// instead of ~7 digits of w_q rho0, and the collision computes in float on
-// them (lb_kernel.cpp). Halo copies and bounce-back (f_-q = f_q - wall term,
-// w_q = w_-q) act on the deviations unchanged; everything that needs a full
-// population adds w_q rho0 back (full_population, moments, total_mass).
+// Precision: every function that touches the populations is a template on
+// the stored type (Real: double, or float as deviations from the rest
+// state), chosen once per call by m_pop.visit(), outside the node loops.
 //
 // Units: populations are mass densities (the unit of `dens`); velocities in
 // the kernel are lattice velocities u * tau / agrid, force densities are
@@ -55,6 +36,7 @@
 #include "communication/shared_segment.hpp"
 #include "lb/coupling_nodes.hpp"
 #include "lb/lb_lattice.hpp"
+#include "lb/population_storage.hpp"
 #include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
 #include "utils/vector.hpp"
@@ -147,7 +129,6 @@ public:
    *  the fluid nodes when boundaries are first set if balance_fluid. */
   LBFluid(const LBParams& params, const BoxGeometry& box, MPI_Comm comm = MPI_COMM_SELF,
           const Vec3i& node_grid = Vec3i::Zero(), bool balance_fluid = true);
-  ~LBFluid();
   LBFluid(const LBFluid&) = delete;
   LBFluid& operator=(const LBFluid&) = delete;
 
@@ -324,7 +305,7 @@ public:
     return d == 0 ? 1 : d == 1 ? m_pad[0] : static_cast<std::ptrdiff_t>(m_pad[0]) * m_pad[1];
   }
   /** Number of padded node slots (bound of every padded index). */
-  std::size_t n_padded_slots() const { return m_stride; }
+  std::size_t n_padded_slots() const { return m_pop.stride(); }
   /** Node velocity in MD units at a padded index (boundary velocity on solid nodes). */
   inline Vec3 velocity_at_index(std::size_t n) const;
   /** Bulk deposits: open_impulse_field() switches the force field on for the
@@ -466,16 +447,6 @@ private:
     std::size_t node = 0;
     double rho = 0.0, speed = 0.0;
   };
-  /** Per population q, the offset that locates it in the current layout
-   *  (normal: q * stride; swapped: -q * stride - c_q), see population_slot. */
-  const std::ptrdiff_t* read_offset() const {
-    return m_swapped ? m_read_swapped.data() : m_read_normal.data();
-  }
-  /** Offset into m_f of the pre-collision population q of padded node n
-   *  (fluid node, or a domain node of any kind in the normal state). */
-  std::size_t population_slot(int q, std::size_t n) const {
-    return static_cast<std::size_t>(read_offset()[q] + static_cast<std::ptrdiff_t>(n));
-  }
   /** Rewrites a swapped lattice in the normal layout (rare: geometry changes). */
   void normalize_layout();
   /** fill_ghosts: copy the domain into the ghost layer (after an even update);
@@ -485,47 +456,6 @@ private:
   bool update_run(const Run& r, Real* f, BadNode& bad);
   /** step() on the populations stored as Real. */
   template <typename Real> void step_stored_as(Real* f);
-  /** body(f) with f the populations as double* or float* (their stored
-   *  type): the one branch on the precision, outside the caller's loops. */
-  template <class Body> decltype(auto) with_populations(Body&& body) const {
-    if (m_p.single_precision)
-      return body(static_cast<float*>(m_f));
-    return body(static_cast<double*>(m_f));
-  }
-  /** The stored value at offset `slot` of the array (any precision; in
-   *  single precision a deviation, see full_population). */
-  double population_at(std::size_t slot) const {
-    return m_p.single_precision ? double(static_cast<const float*>(m_f)[slot])
-                                : static_cast<const double*>(m_f)[slot];
-  }
-  /** Stores v at offset `slot` (rounded to float in single precision). */
-  void set_population_at(std::size_t slot, double v) {
-    if (m_p.single_precision)
-      static_cast<float*>(m_f)[slot] = static_cast<float>(v);
-    else
-      static_cast<double*>(m_f)[slot] = v;
-  }
-  /** What the array holds less the population: w_q rho0 in single
-   *  precision (deviation storage, see top), 0 in double. */
-  double rest_population(int q) const {
-    return m_p.single_precision ? d3q19::w[q] * m_p.density : 0.0;
-  }
-  /** The full population q at offset `slot` (any precision). */
-  double full_population(int q, std::size_t slot) const {
-    if (m_p.single_precision)
-      return double(static_cast<const float*>(m_f)[slot]) + rest_population(q);
-    return static_cast<const double*>(m_f)[slot];
-  }
-  /** Stores the full population v of direction q at offset `slot`. */
-  void set_full_population(int q, std::size_t slot, double v) {
-    if (m_p.single_precision)
-      static_cast<float*>(m_f)[slot] = static_cast<float>(v - rest_population(q));
-    else
-      static_cast<double*>(m_f)[slot] = v;
-  }
-  std::size_t population_bytes() const {
-    return m_p.single_precision ? sizeof(float) : sizeof(double);
-  }
   /** Throws SimulationInstability for the bad node; step() refuses to run
    *  after it (m_failed_update). */
   [[noreturn]] void report_instability(const BadNode& bad);
@@ -540,11 +470,8 @@ private:
   bool m_balance = true;
   Vec3i m_global, m_origin; ///< global lattice, this rank's first node
   Vec3i m_n, m_pad;         ///< this rank's extent, + 2 ghost layers
-  std::size_t m_stride = 0;
-  /// populations, 19 * stride, updated in place: double, or float when
-  /// single_precision (access through with_populations / population_at)
-  void* m_f = nullptr;
-  bool m_swapped = false; ///< after an odd number of updates (see top)
+  /// the populations and the parity of the in-place update
+  PopulationStorage m_pop;
   /// force density of the particle coupling, 3 components per node
   /// (node-major: one cache line per deposit; the kernel reads it per block).
   /// A node's entry holds a deposit only where its bit in m_field_valid is
@@ -573,7 +500,7 @@ private:
   std::uint64_t m_n_flaggings = 0;
   std::vector<Run> m_runs;
   std::vector<Link> m_links;
-  /// Pairs of places in m_f that a fix-up after the update copies between
+  /// Pairs of places in the populations that a fix-up after the update copies between
   /// (with a term subtracted), as runs: `length` places `step` apart from
   /// `first` and from `second`. Walls and periodic faces give runs of whole
   /// rows along x (step 1), so the fix-ups are vectorised copies instead of
@@ -647,7 +574,6 @@ private:
   std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
   mutable double m_halo_seconds = 0.0, m_coupling_exchange_seconds = 0.0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
-  std::array<std::ptrdiff_t, d3q19::Q> m_read_normal{}, m_read_swapped{};
   Vec3 m_ext_lattice = Vec3::Zero();
   double m_kT_lattice = 0.0;
   std::array<double, d3q19::Q> m_noise_factor{}; ///< 3 kT (1 - lambda_m^2) / b_m
@@ -665,7 +591,7 @@ private:
 // Inline: the coupling's velocity pass calls these once per lattice node it
 // needs, so the 19 sums belong in its loop.
 inline void LBFluid::moments(std::size_t n, double& rho, Vec3& j) const {
-  with_populations([&](const auto* f) { moments_of(f, n, rho, j); });
+  m_pop.visit([&](const auto* f) { moments_of(f, n, rho, j); });
 }
 
 template <typename Real>
@@ -673,7 +599,7 @@ inline void LBFluid::moments_of(const Real* populations, std::size_t n, double& 
                                 Vec3& j) const {
   // the 19 loads with the layout's offsets, the velocity components known at
   // compile time after unrolling, so the zero ones drop out
-  const std::ptrdiff_t* off = read_offset();
+  const std::ptrdiff_t* off = m_pop.read_offset();
   const Real* f = populations + n;
   double r = 0.0, jx = 0.0, jy = 0.0, jz = 0.0;
 #pragma GCC unroll 19

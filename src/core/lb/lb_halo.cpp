@@ -111,7 +111,7 @@ void LBFluid::build_halo_pairs() {
                 index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
             if (m_flag[ghost] != 0 || m_flag[ghost - m_offset[q]] != 0)
               return;
-            const std::size_t slot = static_cast<std::size_t>(q) * m_stride;
+            const std::size_t slot = static_cast<std::size_t>(q) * m_pop.stride();
             pairs.push_back({slot + ghost, slot + domain_index(g), 1, 0.0});
           });
           continue;
@@ -122,7 +122,7 @@ void LBFluid::build_halo_pairs() {
               index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
           if (m_flag[ghost] != 0 || m_flag[ghost - m_offset[q]] != 0)
             return;
-          in.ghost.push_back(static_cast<std::size_t>(q) * m_stride + ghost);
+          in.ghost.push_back(static_cast<std::size_t>(q) * m_pop.stride() + ghost);
         });
         const Vec3i c_behind = me - o;
         HaloPeer& out = peer(behind);
@@ -131,7 +131,7 @@ void LBFluid::build_halo_pairs() {
                        const std::size_t face = domain_index(g);
                        if (m_flag[face] != 0 || m_flag[face - m_offset[q]] != 0)
                          return;
-                       out.face.push_back(static_cast<std::size_t>(q) * m_stride + face);
+                       out.face.push_back(static_cast<std::size_t>(q) * m_pop.stride() + face);
                      });
         // the coupling's stencils reach ghosts only across split axes (an
         // unsplit axis wraps onto this rank's own nodes): their velocities
@@ -144,7 +144,7 @@ void LBFluid::build_halo_pairs() {
           const std::size_t ghost =
               index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
           if (m_ghost_slot.empty())
-            m_ghost_slot.assign(m_stride, no_ghost_slot);
+            m_ghost_slot.assign(m_pop.stride(), no_ghost_slot);
           if (m_ghost_slot[ghost] == no_ghost_slot) {
             m_ghost_slot[ghost] = static_cast<std::uint32_t>(m_ghost_velocity.size());
             m_ghost_velocity.emplace_back(Vec3::Zero());
@@ -264,7 +264,7 @@ std::size_t LBFluid::halo_bytes() const {
   std::size_t n = 0;
   for (const HaloPeer& p : m_peers)
     n += p.face.size(); // sent by a fill, as many as the ghosts folded back
-  return n * population_bytes();
+  return n * m_pop.value_bytes();
 }
 
 namespace {

@@ -83,7 +83,7 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
         } else if (prop == "stored_population") {
           const std::size_t own = owned_index(node);
           for (int q = 0; q < Q; ++q)
-            o[q] = population_at(population_slot(q, own));
+            o[q] = m_pop.at(m_pop.slot(q, own));
         } else if (prop == "coupling_field") {
           const std::size_t own = owned_index(node);
           if (!m_field.empty() && field_valid(own)) {
@@ -143,7 +143,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         const std::size_t own = owned_index(node);
         if (own != npos && prop == "stored_population") {
           for (int q = 0; q < Q; ++q)
-            set_population_at(population_slot(q, own), v[q]);
+            m_pop.set_at(m_pop.slot(q, own), v[q]);
           continue;
         }
         if (own != npos && prop == "coupling_field") {
@@ -164,7 +164,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // on every rank (it decides collective recomputations)
         if (prop == "population") {
           for (int q = 0; q < Q; ++q)
-            set_full_population(q, population_slot(q, own), v[q]);
+            m_pop.set_full(q, m_pop.slot(q, own), v[q]);
           continue;
         }
         const double rho = prop == "density" ? v[0] : node_density(node);
@@ -172,7 +172,7 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
         // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
         const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
         for (int q = 0; q < Q; ++q)
-          set_full_population(q, population_slot(q, own), equilibrium(q, rho, u_lattice));
+          m_pop.set_full(q, m_pop.slot(q, own), equilibrium(q, rho, u_lattice));
       }
 }
 
@@ -206,7 +206,7 @@ Populations LBFluid::node_populations(const Vec3i& node) const {
     return f;
   }
   for (int q = 0; q < Q; ++q)
-    f[q] = full_population(q, population_slot(q, n));
+    f[q] = m_pop.full(q, m_pop.slot(q, n));
   return f;
 }
 
@@ -228,7 +228,7 @@ void LBFluid::set_node_populations(const Vec3i& node, const Populations& f) {
     require(std::isfinite(f[q]), "population: values must be finite");
   ++m_state_version; // after the checks: a refused call changes nothing
   for (int q = 0; q < Q; ++q)
-    set_full_population(q, population_slot(q, n), f[q]);
+    m_pop.set_full(q, m_pop.slot(q, n), f[q]);
 }
 
 void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec3& u) {
@@ -240,7 +240,7 @@ void LBFluid::set_node_density_velocity(const Vec3i& node, double rho, const Vec
   const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
   ++m_state_version;
   for (int q = 0; q < Q; ++q)
-    set_full_population(q, population_slot(q, n), equilibrium(q, rho, u_lattice));
+    m_pop.set_full(q, m_pop.slot(q, n), equilibrium(q, rho, u_lattice));
 }
 
 namespace {

@@ -324,8 +324,8 @@ bool LBFluid::update_run(const Run& r, Real* f, BadNode& bad_node) {
   // f[read[q] + n] and its post-collision value written to f[write[q] + n];
   // within one update each node reads and writes the same 19 places
   // (write[q] = read[-q]), so the update is in place and race-free. The read
-  // places are those of the layout the update starts from (read_offset()).
-  const std::ptrdiff_t* const read = even ? m_read_normal.data() : m_read_swapped.data();
+  // places are those of the layout the update starts from (m_pop.read_offset()).
+  const std::ptrdiff_t* const read = m_pop.read_offset_in(!even);
   std::ptrdiff_t write[Q];
   for (int q = 0; q < Q; ++q)
     write[q] = read[opposite(q)];
@@ -528,7 +528,7 @@ template <typename Real> void LBFluid::apply_bounce_back(Real* f) const {
   // solid node's slot q and goes to the fluid node's slot -q; after an even
   // update it sits in the fluid node's slot -q and goes to the solid node's
   // slot q, where the next (odd) update reads the fluid node's f_{-q}.
-  apply_runs(f, m_bounce_back, m_swapped);
+  apply_runs(f, m_bounce_back, m_pop.swapped());
 }
 
 void LBFluid::report_instability(const BadNode& bad) {
@@ -565,14 +565,14 @@ void LBFluid::step() {
   require_flagged("a lattice update");
   check_usable();
   ++m_state_version;
-  with_populations([this](auto* f) { step_stored_as(f); });
+  m_pop.visit([this](auto* f) { step_stored_as(f); });
 }
 
 template <typename Real> void LBFluid::step_stored_as(Real* f) {
   const bool thermal = m_kT_lattice > 0.0;
   const bool field = m_field_used;
   const bool relaxed = m_relax.even == 0.0;
-  const bool even = !m_swapped;
+  const bool even = !m_pop.swapped();
   const long n_runs = static_cast<long>(m_runs.size());
   long first_bad = n_runs;
   BadNode bad_node;
@@ -645,7 +645,7 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
   if (first_bad < n_runs)
     // the update is abandoned half done: the fluid state is not usable after this
     report_instability(bad_node);
-  m_swapped = even;
+  m_pop.set_swapped(even);
   halo_exchange(f, even);
   apply_bounce_back(f);
   if (!m_open.empty())

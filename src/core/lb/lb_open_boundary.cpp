@@ -129,8 +129,8 @@ void LBFluid::apply_open_boundaries() {
       }
       for (int q = 0; q < Q; ++q) {
         const double non_equilibrium =
-            full_population(q, population_slot(q, nb)) - equilibrium(q, rho_n, u_n);
-        set_full_population(q, population_slot(q, n), equilibrium(q, rho_b, u_b) + non_equilibrium);
+            m_pop.full(q, m_pop.slot(q, nb)) - equilibrium(q, rho_n, u_n);
+        m_pop.set_full(q, m_pop.slot(q, n), equilibrium(q, rho_b, u_b) + non_equilibrium);
       }
     });
   }
