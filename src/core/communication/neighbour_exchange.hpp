@@ -8,7 +8,7 @@
 // this rank itself is copied in place (the local transport); the others go
 // as MPI messages. (The lattice halo's shared-memory transport, where both
 // ranks map each other's segment, is set up by the lattice itself and
-// signalled through an empty message of such a round: lb_kernel.cpp.)
+// signalled through an empty message of such a round: lb_halo.cpp.)
 #pragma once
 
 #include <mpi.h>

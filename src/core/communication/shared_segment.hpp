@@ -1,6 +1,6 @@
 // Memory that ranks on the same machine read from each other directly: the
 // lattice's halo goes through it instead of MPI messages (LBFluid,
-// lb_kernel.cpp), which saves the transfer's copies and its handshake.
+// lb_halo.cpp), which saves the transfer's copies and its handshake.
 //
 // A segment is an anonymous memory file (memfd_create) mapped by its owner;
 // another process maps it read-only through /proc/<pid>/fd/<fd>, which the

@@ -1,4 +1,4 @@
-// Code generation of the lattice's hot loops (lb_kernel.cpp, lb_halo.cpp):
+// Code generation of the lattice's hot loops (collide_stream.cpp, lb_kernel.cpp, lb_halo.cpp):
 // included after the other headers, it applies to the functions below it
 // in that file only.
 #pragma once

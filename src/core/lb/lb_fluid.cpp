@@ -1,9 +1,9 @@
-// LBFluid: parameters, geometry (boundaries, fluid runs, bounce-back links),
-// the repartition and the totals. The update kernel is in lb_kernel.cpp, the
+// LBFluid: parameters, the boundary flagging step (flags, runs and links from
+// boundary_links.cpp), the load balance and repartition, the totals. The
+// update loop is in lb_kernel.cpp (its sweep in collide_stream.cpp), the
 // halo in lb_halo.cpp, node and block access and VTK output in lb_io.cpp.
 #include "lb/lb_fluid.hpp"
 
-#include "shapes/union.hpp"
 #include "utils/errors.hpp"
 
 #include <algorithm>
@@ -191,77 +191,6 @@ void LBFluid::allocate_subdomain() {
           m_pop.set_full(q, q * m_pop.stride() + index(x, y, z), w[q] * m_p.density);
 }
 
-std::vector<std::uint16_t> LBFluid::flags_for(const std::vector<BoundarySpec>& boundaries) const {
-  // every padded node, ghosts included, from the shapes at its global
-  // position (wrapped periodically): the ghosts' flags are those the
-  // neighbouring rank gives its nodes, with no communication
-  std::vector<std::uint16_t> flag(static_cast<std::size_t>(m_pad[0]) * m_pad[1] * m_pad[2], 0);
-  if (boundaries.empty())
-    return flag;
-  // per axis and padded coordinate: the wrapped global node and its centre
-  std::array<std::vector<int>, 3> global;
-  std::array<std::vector<double>, 3> centre;
-  for (int d = 0; d < 3; ++d)
-    for (int x = 0; x < m_pad[d]; ++x) {
-      const int g = ((m_origin[d] + x - 1) % m_global[d] + m_global[d]) % m_global[d];
-      global[d].push_back(g);
-      centre[d].push_back((static_cast<double>(g) + 0.5) * m_p.agrid);
-    }
-  // A Union's members flag its nodes one by one (a node is in the union
-  // exactly when it is in a member), each over its own bounding box
-  std::vector<std::pair<const shapes::Shape*, std::uint16_t>> leaves;
-  auto add_leaves = [&leaves](const shapes::Shape& shape, std::uint16_t mark, auto& self) -> void {
-    if (const auto* u = dynamic_cast<const shapes::Union*>(&shape)) {
-      for (const auto& member : u->shapes())
-        self(*member, mark, self);
-      return;
-    }
-    leaves.emplace_back(&shape, mark);
-  };
-  for (std::size_t b = 0; b < boundaries.size(); ++b)
-    add_leaves(*boundaries[b].shape, static_cast<std::uint16_t>(b + 1), add_leaves);
-  // Shape by shape, in list order, over the padded coordinates whose node
-  // centres lie in its bounding box (one node wider each way against
-  // rounding; all of them for an unbounded shape), testing only the nodes
-  // no earlier boundary took: the first boundary containing a node wins, as
-  // a test of every boundary at every node would give
-  std::array<std::vector<int>, 3> visit;
-  for (const auto& [shape_ptr, mark] : leaves) {
-    const shapes::Shape& shape = *shape_ptr;
-    Vec3 lo, hi;
-    const bool bounded = shape.bounding_box(lo, hi);
-    bool empty = false;
-    for (int d = 0; d < 3; ++d) {
-      double first = 0.0, last = m_global[d] - 1.0;
-      if (bounded) {
-        const double l = std::floor(lo[d] / m_p.agrid - 0.5) - 1.0;
-        const double h = std::ceil(hi[d] / m_p.agrid - 0.5) + 1.0;
-        if (l > first) // (NaN: the whole axis)
-          first = l;
-        if (h < last)
-          last = h;
-      }
-      visit[d].clear();
-      for (int x = 0; x < m_pad[d]; ++x)
-        if (global[d][x] >= first && global[d][x] <= last)
-          visit[d].push_back(x);
-      empty = empty || visit[d].empty();
-    }
-    if (empty)
-      continue;
-    for (const int z : visit[2])
-      for (const int y : visit[1]) {
-        const std::size_t row = index(0, y, z);
-        for (const int x : visit[0]) {
-          std::uint16_t& f = flag[row + static_cast<std::size_t>(x)];
-          if (f == 0 && shape.is_inside(Vec3(centre[0][x], centre[1][y], centre[2][z])))
-            f = mark;
-        }
-      }
-  }
-  return flag;
-}
-
 void LBFluid::repartition(const DomainGrid& old_grid) {
   // Every rank sends the nodes of its old subdomain that lie in another
   // rank's new one (all 19 populations, normal layout, x fastest over the
@@ -345,7 +274,7 @@ std::size_t LBFluid::owned_index(const Vec3i& node) const {
 
 void LBFluid::normalize_layout() {
   m_pop.normalize([this](auto&& body) {
-    for (const Run& r : m_runs)
+    for (const Run& r : m_geometry.runs)
       for (int i = 0; i < r.length; ++i)
         body(r.start + i);
   });
@@ -498,74 +427,15 @@ void LBFluid::update_boundaries() {
 
 void LBFluid::rebuild_geometry() {
   ++m_state_version;
-  m_runs.clear();
-  m_links.clear();
-  m_n_fluid = 0;
-  // runs of fluid nodes along x, in memory order
-  for (int z = 1; z <= m_n[2]; ++z)
-    for (int y = 1; y <= m_n[1]; ++y) {
-      int x = 1;
-      while (x <= m_n[0]) {
-        if (m_flag[index(x, y, z)] != 0) {
-          ++x;
-          continue;
-        }
-        const int start = x;
-        while (x <= m_n[0] && m_flag[index(x, y, z)] == 0)
-          ++x;
-        m_runs.push_back({index(start, y, z), x - start});
-        m_n_fluid += static_cast<std::size_t>(x - start);
-        for (int xx = start; xx < x; ++xx) {
-          const std::size_t n = index(xx, y, z);
-          for (int q = 1; q < Q; ++q) {
-            const std::size_t s = n + m_offset[q];
-            if (m_flag[s] == 0)
-              continue;
-            const int b = m_flag[s] - 1;
-            const Vec3 u_wall = m_boundaries[b].velocity * m_p.tau / m_p.agrid;
-            const double cu = c[q][0] * u_wall[0] + c[q][1] * u_wall[1] + c[q][2] * u_wall[2];
-            m_links.push_back({n, s, q, b, 6.0 * w[q] * m_p.density * cu});
-          }
-        }
-      }
-    }
-  std::vector<PlaceRun> links;
-  for (const Link& l : m_links)
-    links.push_back(
-        {l.q * m_pop.stride() + l.solid, opposite(l.q) * m_pop.stride() + l.node, 1, l.wall_term});
-  m_bounce_back = merge_runs(std::move(links));
-  long counts[2] = {static_cast<long>(m_n_fluid), static_cast<long>(m_links.size())};
+  m_geometry = fluid_geometry(m_flag, padded_box(), m_offset, m_boundaries, m_p.tau, m_p.agrid,
+                              m_p.density, m_pop.stride());
+  long counts[2] = {static_cast<long>(m_geometry.n_fluid),
+                    static_cast<long>(m_geometry.links.size())};
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_LONG, MPI_SUM, m_grid.comm());
   m_n_fluid_global = static_cast<std::size_t>(counts[0]);
   m_n_links_global = static_cast<std::size_t>(counts[1]);
   build_halo_pairs();
-}
-
-std::vector<LBFluid::PlaceRun> LBFluid::merge_runs(std::vector<PlaceRun> pairs) {
-  std::sort(pairs.begin(), pairs.end(),
-            [](const PlaceRun& a, const PlaceRun& b) { return a.first < b.first; });
-  std::vector<PlaceRun> runs;
-  for (const PlaceRun& p : pairs) {
-    if (!runs.empty() && p.term == runs.back().term) {
-      PlaceRun& last = runs.back();
-      // a second pair sets the step (the next place in memory order
-      // first: contiguous wherever a row continues), the others follow it
-      if (last.length == 1 && p.first > last.first && p.second > last.second &&
-          p.first - last.first == p.second - last.second) {
-        last.step = p.first - last.first;
-        ++last.length;
-        continue;
-      }
-      if (last.length > 1 && p.first == last.first + last.length * last.step &&
-          p.second == last.second + last.length * last.step) {
-        ++last.length;
-        continue;
-      }
-    }
-    runs.push_back(p);
-  }
-  return runs;
 }
 
 Vec3 LBFluid::boundary_force(int b) const {
@@ -576,7 +446,7 @@ Vec3 LBFluid::boundary_force(int b) const {
   // f_q* sent towards the wall came back as f_{-q} = f_q* - wall_term, so the
   // wall received c_q (f_q* + f_{-q}) = c_q (2 f_{-q} + wall_term).
   Vec3 sum = Vec3::Zero();
-  for (const Link& l : m_links) {
+  for (const BoundaryLink& l : m_geometry.links) {
     if (l.boundary != b)
       continue;
     const double back = m_pop.full(opposite(l.q), m_pop.slot(opposite(l.q), l.node));
@@ -630,7 +500,7 @@ double LBFluid::total_mass() const {
   require_flagged("the fluid's total mass");
   double mass = 0.0; // summed in double in either precision
   m_pop.visit([&](const auto* populations) {
-    for (const Run& r : m_runs)
+    for (const Run& r : m_geometry.runs)
       for (int q = 0; q < Q; ++q) {
         const auto* f = populations + m_pop.slot(q, r.start);
         for (int i = 0; i < r.length; ++i)
@@ -639,7 +509,7 @@ double LBFluid::total_mass() const {
     // deviation storage (single precision): each fluid node holds rho0 more
     if constexpr (std::is_same_v<std::remove_const_t<std::remove_pointer_t<decltype(populations)>>,
                                  float>)
-      mass += m_p.density * static_cast<double>(m_n_fluid);
+      mass += m_p.density * static_cast<double>(m_geometry.n_fluid);
   });
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, &mass, 1, MPI_DOUBLE, MPI_SUM, m_grid.comm());
@@ -650,7 +520,7 @@ Vec3 LBFluid::total_momentum() const {
   require_flagged("the fluid's total momentum");
   Vec3 j = Vec3::Zero();
   m_pop.visit([&](const auto* populations) {
-    for (const Run& r : m_runs) {
+    for (const Run& r : m_geometry.runs) {
       for (int q = 1; q < Q; ++q) {
         const auto* f = populations + m_pop.slot(q, r.start);
         double s = 0.0;

@@ -34,6 +34,8 @@
 
 #include "communication/domain_grid.hpp"
 #include "communication/shared_segment.hpp"
+#include "lb/boundary_links.hpp"
+#include "lb/collide_stream.hpp"
 #include "lb/coupling_nodes.hpp"
 #include "lb/lb_lattice.hpp"
 #include "lb/population_storage.hpp"
@@ -75,13 +77,6 @@ struct LBParams {
   bool single_precision = false;
 };
 
-/** A boundary: nodes whose centre lies in the shape (dist <= 0) are solid,
- *  moving with `velocity` (MD units). */
-struct BoundarySpec {
-  std::shared_ptr<const shapes::Shape> shape;
-  Vec3 velocity = Vec3::Zero();
-};
-
 /** Second-order equilibrium (Qian et al. 1992) of population q at density
  *  rho and lattice velocity u. */
 inline double equilibrium(int q, double rho, const Vec3& u) {
@@ -114,9 +109,6 @@ struct OpenBoundarySpec {
 
 /** Post-collision = equilibrium + lambda (pre - equilibrium) per mode group;
  *  lambda = 1 - omega, omega the relaxation rate. */
-struct Relaxation {
-  double shear, bulk, even, odd;
-};
 
 using Populations = std::array<double, d3q19::Q>;
 using Mat3 = Eigen::Matrix3d;
@@ -263,6 +255,17 @@ public:
    *  get_block) are set on every node of the block. */
   void set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                  const std::vector<double>& values);
+  /** Collective: get_block's values on rank `root` only (empty elsewhere).
+   *  Each rank sends the nodes it owns, so no other rank holds more than its
+   *  own part of the block (checkpoints and VTK fields, whose writer alone
+   *  needs them). */
+  std::vector<double> gather_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                                   int root) const;
+  /** Collective: set_block of a checkpoint's raw state (stored_population,
+   *  coupling_field) with the values given on rank `root` only (ignored
+   *  elsewhere): each rank receives the nodes it owns. */
+  void scatter_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                     const std::vector<double>& values, int root);
   /** -1 for a fluid node, else the index of the boundary. */
   int node_boundary(const Vec3i& node) const;
   double node_density(const Vec3i& node) const;
@@ -373,18 +376,10 @@ public:
   void write_vtk_boundary(const std::string& path) const;
 
 private:
-  struct Run {
-    std::size_t start;
-    int length;
-  };
-  struct Link {
-    std::size_t node, solid; ///< fluid node, padded index of the solid neighbour
-    int q, boundary;         ///< direction fluid -> solid, boundary index
-    double wall_term;        ///< 6 w_q rho0 c_q . u_wall (lattice units)
-  };
-  // x innermost: fluid runs follow x, the usual flow direction of a channel,
-  // so channels whose walls are normal to y or z still have long runs
-  std::size_t index(int x, int y, int z) const {
+  using Run = FluidRun;
+  /** This rank's subdomain with its ghost layer (boundary_links.hpp). */
+  PaddedBox padded_box() const { return {m_global, m_origin, m_n, m_pad}; }
+  std::size_t index(int x, int y, int z) const { // as PaddedBox::index
     return (static_cast<std::size_t>(z) * m_pad[1] + y) * m_pad[0] + x;
   }
   /** Padded (x, y, z) of a padded node index. */
@@ -400,11 +395,19 @@ private:
   void write_vtk_field(const std::string& path, const std::string& prop) const;
   /** Throws InputError unless lo <= node < hi is a non-empty block of the lattice. */
   void check_block(const Vec3i& lo, const Vec3i& hi) const;
-  /** Flags of this rank's padded nodes (ghosts too) for these boundaries:
-   *  0 fluid, b + 1 for the first boundary b whose shape contains the
-   *  node's centre (wrapped into the box). Each boundary visits only the
-   *  nodes of its bounding box that no earlier boundary took. */
-  std::vector<std::uint16_t> flags_for(const std::vector<BoundarySpec>& boundaries) const;
+  /** The values of node property `prop` at a node this rank owns. */
+  void node_values(const std::string& prop, const Vec3i& node, double* out) const;
+  /** Sets a settable property at `node` where this rank owns it (solid
+   *  nodes: the raw state only); no checks, no state-version count. */
+  void set_node_values(const std::string& prop, const Vec3i& node, const double* v);
+  /** The part of block [lo, hi) that rank r owns (gather/scatter_block). */
+  void block_part(int r, const Vec3i& lo, const Vec3i& hi, Vec3i& first, Vec3i& extent) const;
+  /** Flags of this rank's padded nodes (ghosts too) for these boundaries
+   *  (flag_nodes: each boundary visits only the nodes of its bounding box
+   *  that no earlier boundary took). */
+  std::vector<std::uint16_t> flags_for(const std::vector<BoundarySpec>& boundaries) const {
+    return flag_nodes(boundaries, padded_box(), m_p.agrid);
+  }
   /** Allocates the populations (rest state at dens) and flags for the grid's subdomain. */
   void allocate_subdomain();
   /** Moves the populations to the grid's new cuts (collective). */
@@ -442,18 +445,11 @@ private:
    *  of open face `face` that this rank owns. */
   template <class Body> void for_each_open_node(const OpenBoundarySpec& face, Body&& body) const;
   std::vector<OpenBoundarySpec> m_open;
-  /** Where an update found a node out of the model's range. */
-  struct BadNode {
-    std::size_t node = 0;
-    double rho = 0.0, speed = 0.0;
-  };
   /** Rewrites a swapped lattice in the normal layout (rare: geometry changes). */
   void normalize_layout();
   /** fill_ghosts: copy the domain into the ghost layer (after an even update);
    *  else fold the ghost layer into the domain (after an odd update). */
   template <typename Real> void halo_exchange(Real* f, bool fill_ghosts) const;
-  template <typename Real, bool thermal, bool with_field, bool even_ghosts_relaxed, bool even>
-  bool update_run(const Run& r, Real* f, BadNode& bad);
   /** step() on the populations stored as Real. */
   template <typename Real> void step_stored_as(Real* f);
   /** Throws SimulationInstability for the bad node; step() refuses to run
@@ -482,15 +478,6 @@ private:
   std::vector<double> m_field;
   std::vector<std::uint64_t> m_field_valid;
   bool m_field_used = false;
-  /** The bits of m_field_valid for the padded nodes n .. n + 31 (bit i: n + i). */
-  std::uint32_t field_valid_bits32(std::size_t n) const {
-    const std::size_t word = n >> 6;
-    const unsigned shift = static_cast<unsigned>(n & 63);
-    std::uint64_t bits = m_field_valid[word] >> shift;
-    if (shift > 32) // the block reaches into the next word (one spare word at the end)
-      bits |= m_field_valid[word + 1] << (64 - shift);
-    return static_cast<std::uint32_t>(bits);
-  }
   bool field_valid(std::size_t n) const { return (m_field_valid[n >> 6] >> (n & 63)) & 1u; }
   std::vector<std::uint16_t> m_flag;      ///< 0 fluid, b + 1 boundary b (ghosts too)
   std::vector<BoundarySpec> m_boundaries; ///< those the flags are of
@@ -498,35 +485,12 @@ private:
   std::vector<BoundarySpec> m_pending_boundaries;
   bool m_boundaries_pending = false;
   std::uint64_t m_n_flaggings = 0;
-  std::vector<Run> m_runs;
-  std::vector<Link> m_links;
-  /// Pairs of places in the populations that a fix-up after the update copies between
-  /// (with a term subtracted), as runs: `length` places `step` apart from
-  /// `first` and from `second`. Walls and periodic faces give runs of whole
-  /// rows along x (step 1), so the fix-ups are vectorised copies instead of
-  /// a list of scattered single places; the faces normal to x give columns
-  /// along y (step: a row), one descriptor each instead of one per place
-  /// (their order does not matter: no place is written twice, none read
-  /// after another pair wrote it).
-  struct PlaceRun {
-    std::size_t first, second;
-    std::size_t length;
-    double term;
-    std::size_t step = 1;
-  };
-  /** Single pairs (length 1) merged into runs; sorts them by `first`. */
-  static std::vector<PlaceRun> merge_runs(std::vector<PlaceRun> pairs);
-  /** f[to] = f[from] - term for every pair of the runs, into `first`
-   *  (into_first) or into `second`. */
-  template <typename Real>
-  static void apply_runs(Real* f, const std::vector<PlaceRun>& runs, bool into_first);
-  /// the links as the update uses them: first = slot q of the solid node,
-  /// second = slot -q of the fluid node, term = the wall term
-  std::vector<PlaceRun> m_bounce_back;
+  /// runs, links and bounce-back made from the flags (rebuild_geometry)
+  FluidGeometry m_geometry;
   /// first = ghost-layer place (population included), second = its
   /// periodic image, for the halo exchange; fluid ones only
   std::vector<PlaceRun> m_halo;
-  std::size_t m_n_fluid = 0, m_n_fluid_global = 0, m_n_links_global = 0;
+  std::size_t m_n_fluid_global = 0, m_n_links_global = 0;
   /// The halo with one neighbouring rank: population places (q * stride +
   /// node) of this rank's ghosts that the neighbour's faces fill (and that
   /// are folded back into them), and of this rank's faces that fill the

@@ -155,7 +155,7 @@ void LBFluid::build_halo_pairs() {
         visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, false,
                      [&](const Vec3i& g, int) { out.velocity_face.push_back(domain_index(g)); });
       }
-  m_halo = merge_runs(std::move(pairs));
+  m_halo = merge_place_runs(std::move(pairs));
   connect_shared_halo();
 }
 
@@ -448,7 +448,7 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
 }
 
 template <typename Real> void LBFluid::halo_exchange(Real* f, bool fill_ghosts) const {
-  apply_runs(f, m_halo, fill_ghosts);
+  apply_place_runs(f, m_halo, fill_ghosts);
   if (m_peers.empty())
     return;
   const auto start = std::chrono::steady_clock::now();

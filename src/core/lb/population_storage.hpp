@@ -24,7 +24,7 @@
 // (Skordos, Phys. Rev. E 48, 4823 (1993)): a fluid near rest stores values
 // near 0, so float keeps ~7 digits of the small non-equilibrium parts
 // instead of ~7 digits of w_q rho0, and the collision computes in float on
-// them (lb_kernel.cpp). Copies and bounce-back (f_-q = f_q - wall term,
+// them (collide_stream.cpp). Copies and bounce-back (f_-q = f_q - wall term,
 // w_q = w_-q) act on the deviations unchanged; everything that needs a full
 // population adds w_q rho0 back (full(), LBFluid::moments_of).
 #pragma once
