@@ -12,7 +12,11 @@ Prints the file size, and the least of --repeats wall times of
 lbmd.checkpoint.save (gather: particles and lattice to rank 0, pickle,
 HDF5 write, fsync, rename) and of lbmd.checkpoint.load (rank 0 reads, hands
 the file to the others, the scene rebuilt and the state restored), and
-the time of 1000 steps of the scene for scale. Collective under mpirun.
+the time of 1000 steps of the scene for scale, and per rank the peak
+memory above the resident set that save and load took (Linux: the peak
+is reset through /proc/self/clear_refs before each, read from VmHWM
+after): what a rank must have spare to write or read a checkpoint.
+Collective under mpirun.
 """
 import argparse
 import contextlib
@@ -29,6 +33,26 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SAMPLE = os.path.join(HERE, "..", "..", "samples", "cell_flow_in_bifurcation.py")
 sys.path.insert(0, HERE)
 from benchmark_csv import write_rows  # noqa: E402
+
+
+def _status_kb(field):
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1])
+    return 0
+
+
+def _peak_above_resident(action):
+    """(result of action(), MB of peak resident memory above the start)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")  # the peak resident set starts again from the current one
+    except OSError:
+        pass
+    start = _status_kb("VmRSS")
+    result = action()
+    return result, max(0, _status_kb("VmHWM") - start) / 1024.0
 
 
 def main():
@@ -48,6 +72,13 @@ def main():
     system = g["system"]
     path = os.path.join(folder, "checkpoint.h5")
     saves, loads = [], []
+    # per rank the peak memory a save and a load take (first, untimed)
+    lbmd.comm.Barrier()
+    _, save_peak = _peak_above_resident(
+        lambda: lbmd.checkpoint.save(path, system, **g["checkpoint_objects"]()))
+    _, load_peak = _peak_above_resident(lambda: lbmd.checkpoint.load(path))
+    save_peaks = lbmd.comm.gather(save_peak, root=0)
+    load_peaks = lbmd.comm.gather(load_peak, root=0)
     for _ in range(args.repeats):
         lbmd.comm.Barrier()
         t0 = time.perf_counter()
@@ -67,9 +98,13 @@ def main():
               f"{lbmd.size} rank(s)")
         print(f"checkpoint {size_mb:.1f} MB; save {min(saves):.2f} s, load {min(loads):.2f} s "
               f"(least of {args.repeats}); 1000 steps of the loaded scene {step_time:.2f} s")
+        print("peak memory above the resident set, MB per rank: save "
+              + " ".join(f"{m:.1f}" for m in save_peaks) + "; load " + " ".join(f"{m:.1f}" for m in load_peaks))
         write_rows(args.csv, [dict(ranks=lbmd.size, cells=args.cells, size_mb=round(size_mb, 2),
                                    save_s=round(min(saves), 3), load_s=round(min(loads), 3),
-                                   steps_1000_s=round(step_time, 2))])
+                                   steps_1000_s=round(step_time, 2),
+                                   save_peak_mb_per_rank=" ".join(f"{m:.1f}" for m in save_peaks),
+                                   load_peak_mb_per_rank=" ".join(f"{m:.1f}" for m in load_peaks))])
 
 
 if __name__ == "__main__":

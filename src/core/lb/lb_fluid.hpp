@@ -258,14 +258,15 @@ public:
   /** Collective: get_block's values on rank `root` only (empty elsewhere).
    *  Each rank sends the nodes it owns, so no other rank holds more than its
    *  own part of the block (checkpoints and VTK fields, whose writer alone
-   *  needs them). */
+   *  needs them). The root holds the block and one rank's part at a time. */
   std::vector<double> gather_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                                    int root) const;
   /** Collective: set_block of a checkpoint's raw state (stored_population,
    *  coupling_field) with the values given on rank `root` only (ignored
-   *  elsewhere): each rank receives the nodes it owns. */
+   *  elsewhere): each rank receives the nodes it owns. The root holds the
+   *  values and one rank's part at a time, no more. */
   void scatter_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
-                     const std::vector<double>& values, int root);
+                     const double* values, std::size_t count, int root);
   /** -1 for a fluid node, else the index of the boundary. */
   int node_boundary(const Vec3i& node) const;
   double node_density(const Vec3i& node) const;

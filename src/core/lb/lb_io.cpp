@@ -1,6 +1,8 @@
 // The lattice's input and output: single nodes (this rank's), blocks of
 // nodes (collective: each rank fills its own nodes, the sum over the ranks
-// is every value exactly) and the legacy VTK fields written by rank 0.
+// is every value exactly), blocks through one rank (gather_block,
+// scatter_block: each rank sends or receives only the nodes it owns) and
+// the legacy VTK fields written by rank 0.
 #include "lb/lb_fluid.hpp"
 
 #include "io/vtk_legacy.hpp"
@@ -8,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -54,6 +57,35 @@ void LBFluid::check_block(const Vec3i& lo, const Vec3i& hi) const {
                        " is empty or outside [0, " + std::to_string(m_global[d]) + ")");
 }
 
+void LBFluid::node_values(const std::string& prop, const Vec3i& node, double* o) const {
+  if (prop == "velocity") {
+    const Vec3 u = node_velocity(node);
+    o[0] = u[0], o[1] = u[1], o[2] = u[2];
+  } else if (prop == "density") {
+    o[0] = node_density(node);
+  } else if (prop == "boundary") {
+    o[0] = node_boundary(node) + 1;
+  } else if (prop == "population") {
+    const auto f = node_populations(node);
+    std::copy(f.begin(), f.end(), o);
+  } else if (prop == "stored_population") {
+    const std::size_t own = owned_index(node);
+    for (int q = 0; q < Q; ++q)
+      o[q] = m_pop.at(m_pop.slot(q, own));
+  } else if (prop == "coupling_field") {
+    const std::size_t own = owned_index(node);
+    if (!m_field.empty() && field_valid(own)) {
+      o[0] = 1.0;
+      std::copy(m_field.begin() + 3 * own, m_field.begin() + 3 * own + 3, o + 1);
+    }
+  } else {
+    const Mat3 pt = node_pressure_tensor(node);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        o[3 * a + b] = pt(a, b);
+  }
+}
+
 std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
                                        const Vec3i& hi) const {
   require_flagged("reading lattice nodes");
@@ -66,65 +98,58 @@ std::vector<double> LBFluid::get_block(const std::string& prop, const Vec3i& lo,
   double* o = out.data();
   for (int i = lo[0]; i < hi[0]; ++i)
     for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k, o += nc) {
-        const Vec3i node(i, j, k);
-        if (!owns(node))
-          continue;
-        if (prop == "velocity") {
-          const Vec3 u = node_velocity(node);
-          o[0] = u[0], o[1] = u[1], o[2] = u[2];
-        } else if (prop == "density") {
-          o[0] = node_density(node);
-        } else if (prop == "boundary") {
-          o[0] = node_boundary(node) + 1;
-        } else if (prop == "population") {
-          const auto f = node_populations(node);
-          std::copy(f.begin(), f.end(), o);
-        } else if (prop == "stored_population") {
-          const std::size_t own = owned_index(node);
-          for (int q = 0; q < Q; ++q)
-            o[q] = m_pop.at(m_pop.slot(q, own));
-        } else if (prop == "coupling_field") {
-          const std::size_t own = owned_index(node);
-          if (!m_field.empty() && field_valid(own)) {
-            o[0] = 1.0;
-            std::copy(m_field.begin() + 3 * own, m_field.begin() + 3 * own + 3, o + 1);
-          }
-        } else {
-          const Mat3 pt = node_pressure_tensor(node);
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b)
-              o[3 * a + b] = pt(a, b);
-        }
-      }
+      for (int k = lo[2]; k < hi[2]; ++k, o += nc)
+        if (owns(Vec3i(i, j, k)))
+          node_values(prop, Vec3i(i, j, k), o);
   if (m_grid.size() > 1)
     MPI_Allreduce(MPI_IN_PLACE, out.data(), static_cast<int>(out.size()), MPI_DOUBLE, MPI_SUM,
                   m_grid.comm());
   return out;
 }
 
+namespace {
+/** A block of prop's properties that set_block may write. */
+void require_settable(const std::string& prop) {
+  if (prop != "velocity" && prop != "density" && prop != "population" &&
+      prop != "stored_population" && prop != "coupling_field")
+    throw InputError(prop + " is read-only");
+}
+
+/** a checkpoint's raw state: every node, solid ones included */
+bool raw_property(const std::string& prop) {
+  return prop == "stored_population" || prop == "coupling_field";
+}
+
+/** The count and value checks of a block to set, "" when it is good. */
+std::string block_values_error(const std::string& prop, int nc, const Vec3i& n,
+                               const double* values, std::size_t count) {
+  if (count != static_cast<std::size_t>(n.prod()) * nc)
+    return prop + ": expected " + std::to_string(nc) + " value(s) per node for " +
+           std::to_string(n.prod()) + " node(s), got " + std::to_string(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const double v = values[i];
+    if (!std::isfinite(v))
+      return prop + ": values must be finite";
+    if (prop == "density" && !(v > 0.0))
+      return "density must be a finite number > 0";
+  }
+  return {};
+}
+} // namespace
+
 void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                         const std::vector<double>& values) {
   require_flagged("setting lattice nodes");
   const int nc = block_components(prop);
-  if (prop != "velocity" && prop != "density" && prop != "population" &&
-      prop != "stored_population" && prop != "coupling_field")
-    throw InputError(prop + " is read-only");
-  // a checkpoint's raw state: every node, solid ones included
-  const bool raw = prop == "stored_population" || prop == "coupling_field";
+  require_settable(prop);
   check_block(lo, hi);
   const Vec3i n = hi - lo;
-  if (values.size() != static_cast<std::size_t>(n.prod()) * nc)
-    throw InputError(prop + ": expected " + std::to_string(nc) + " value(s) per node for " +
-                     std::to_string(n.prod()) + " node(s), got " + std::to_string(values.size()));
   // the value checks first, on every rank alike (the same values): a refused
   // block changes nothing anywhere
-  for (std::size_t v = 0; v < values.size(); ++v) {
-    require(std::isfinite(values[v]), prop + ": values must be finite");
-    if (prop == "density")
-      require(values[v] > 0.0, "density must be a finite number > 0");
-  }
-  if (n.prod() == 1 && !raw) {
+  const std::string error = block_values_error(prop, nc, n, values.data(), values.size());
+  if (!error.empty())
+    throw InputError(error);
+  if (n.prod() == 1 && !raw_property(prop)) {
     // a single boundary node is an error on every rank (its owner knows it)
     const std::size_t own = owned_index(lo);
     double solid = own != npos && m_flag[own] != 0 ? 1.0 : 0.0;
@@ -138,42 +163,190 @@ void LBFluid::set_block(const std::string& prop, const Vec3i& lo, const Vec3i& h
   const double* v = values.data();
   for (int i = lo[0]; i < hi[0]; ++i)
     for (int j = lo[1]; j < hi[1]; ++j)
-      for (int k = lo[2]; k < hi[2]; ++k, v += nc) {
-        const Vec3i node(i, j, k);
-        const std::size_t own = owned_index(node);
-        if (own != npos && prop == "stored_population") {
-          for (int q = 0; q < Q; ++q)
-            m_pop.set_at(m_pop.slot(q, own), v[q]);
-          continue;
-        }
-        if (own != npos && prop == "coupling_field") {
-          if (v[0] != 0.0) {
-            open_impulse_field();
-            m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
-            add_field_impulse(own, Vec3(v[1], v[2], v[3]));
-          } else if (!m_field.empty()) {
-            m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
-          }
-          continue;
-        }
-        // a block spanning boundary nodes sets the fluid nodes only
-        if (own == npos || m_flag[own] != 0 || raw)
-          continue;
-        // written here, not through set_node_*: those count a change on
-        // the owner only, and the fluid's state_version must stay the same
-        // on every rank (it decides collective recomputations)
-        if (prop == "population") {
-          for (int q = 0; q < Q; ++q)
-            m_pop.set_full(q, m_pop.slot(q, own), v[q]);
-          continue;
-        }
-        const double rho = prop == "density" ? v[0] : node_density(node);
-        const Vec3 u = prop == "velocity" ? Vec3(v[0], v[1], v[2]) : node_velocity(node);
-        // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
-        const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
-        for (int q = 0; q < Q; ++q)
-          m_pop.set_full(q, m_pop.slot(q, own), equilibrium(q, rho, u_lattice));
-      }
+      for (int k = lo[2]; k < hi[2]; ++k, v += nc)
+        set_node_values(prop, Vec3i(i, j, k), v);
+}
+
+void LBFluid::set_node_values(const std::string& prop, const Vec3i& node, const double* v) {
+  const std::size_t own = owned_index(node);
+  if (own == npos)
+    return;
+  if (prop == "stored_population") {
+    for (int q = 0; q < Q; ++q)
+      m_pop.set_at(m_pop.slot(q, own), v[q]);
+    return;
+  }
+  if (prop == "coupling_field") {
+    if (v[0] != 0.0) {
+      open_impulse_field();
+      m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
+      add_field_impulse(own, Vec3(v[1], v[2], v[3]));
+    } else if (!m_field.empty()) {
+      m_field_valid[own >> 6] &= ~(std::uint64_t{1} << (own & 63));
+    }
+    return;
+  }
+  // a block spanning boundary nodes sets the fluid nodes only
+  if (m_flag[own] != 0)
+    return;
+  // written here, not through set_node_*: those count a change on the owner
+  // only, and the fluid's state_version must stay the same on every rank
+  // (it decides collective recomputations)
+  if (prop == "population") {
+    for (int q = 0; q < Q; ++q)
+      m_pop.set_full(q, m_pop.slot(q, own), v[q]);
+    return;
+  }
+  const double rho = prop == "density" ? v[0] : node_density(node);
+  const Vec3 u = prop == "velocity" ? Vec3(v[0], v[1], v[2]) : node_velocity(node);
+  // the stored momentum is rho u - F_ext / 2 so that node_velocity() returns u
+  const Vec3 u_lattice = u * m_p.tau / m_p.agrid - 0.5 * m_ext_lattice / rho;
+  for (int q = 0; q < Q; ++q)
+    m_pop.set_full(q, m_pop.slot(q, own), equilibrium(q, rho, u_lattice));
+}
+
+// --- blocks through one rank: each rank sends or receives its own nodes ---
+// The part of block [lo, hi) that rank r owns, as its first node and
+// extent (empty: some extent 0); its values travel i slowest, k fastest,
+// the block's own order.
+void LBFluid::block_part(int r, const Vec3i& lo, const Vec3i& hi, Vec3i& first,
+                         Vec3i& extent) const {
+  const Vec3i c = m_grid.coords_of(r);
+  const Vec3i sub_lo = m_grid.lower(c), sub_n = m_grid.extent(c);
+  for (int d = 0; d < 3; ++d) {
+    first[d] = std::max(lo[d], sub_lo[d]);
+    extent[d] = std::max(0, std::min(hi[d], sub_lo[d] + sub_n[d]) - first[d]);
+  }
+}
+
+namespace {
+/** MPI counts are int: a block part past that is refused, not truncated. */
+int mpi_count(std::size_t n, const char* what) {
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw InputError(std::string(what) +
+                     ": the block is too large for one transfer; read or write it in parts");
+  return static_cast<int>(n);
+}
+
+/** Calls body(block offset, node) for the nodes of part (first, extent) of
+ *  the block [lo, lo + n), in the block's order. */
+template <class Body>
+void for_each_part_node(const Vec3i& lo, const Vec3i& n, const Vec3i& first, const Vec3i& extent,
+                        Body&& body) {
+  for (int i = first[0]; i < first[0] + extent[0]; ++i)
+    for (int j = first[1]; j < first[1] + extent[1]; ++j)
+      for (int k = first[2]; k < first[2] + extent[2]; ++k)
+        body((static_cast<std::size_t>(i - lo[0]) * n[1] + (j - lo[1])) * n[2] + (k - lo[2]),
+             Vec3i(i, j, k));
+}
+} // namespace
+
+std::vector<double> LBFluid::gather_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                                          int root) const {
+  require_flagged("reading lattice nodes");
+  const int nc = block_components(prop);
+  check_block(lo, hi);
+  require(root >= 0 && root < m_grid.size(),
+          "gather_block: root rank " + std::to_string(root) + " out of range");
+  if (m_grid.size() == 1)
+    return get_block(prop, lo, hi);
+  const Vec3i n = hi - lo;
+  Vec3i first, extent;
+  block_part(m_grid.rank(), lo, hi, first, extent);
+  std::vector<double> part(static_cast<std::size_t>(extent.prod()) * nc);
+  std::size_t k = 0;
+  for_each_part_node(lo, n, first, extent, [&](std::size_t, const Vec3i& node) {
+    node_values(prop, node, part.data() + k);
+    k += nc;
+  });
+  constexpr int tag = 76;
+  if (m_grid.rank() != root) {
+    MPI_Send(part.data(), mpi_count(part.size(), "gather_block"), MPI_DOUBLE, root, tag,
+             m_grid.comm());
+    return {};
+  }
+  // the root takes the others' parts one by one into one buffer: it holds
+  // the block, its own part and one other, not every part besides
+  std::vector<double> out(static_cast<std::size_t>(n.prod()) * nc), received;
+  for (int r = 0; r < m_grid.size(); ++r) {
+    block_part(r, lo, hi, first, extent);
+    if (r != root) {
+      received.resize(static_cast<std::size_t>(extent.prod()) * nc);
+      MPI_Recv(received.data(), mpi_count(received.size(), "gather_block"), MPI_DOUBLE, r, tag,
+               m_grid.comm(), MPI_STATUS_IGNORE);
+    }
+    const double* in = r == root ? part.data() : received.data();
+    for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
+      std::copy(in, in + nc, out.data() + at * nc);
+      in += nc;
+    });
+  }
+  return out;
+}
+
+void LBFluid::scatter_block(const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                            const double* values, std::size_t count, int root) {
+  require_flagged("setting lattice nodes");
+  const int nc = block_components(prop);
+  require_settable(prop);
+  require(raw_property(prop),
+          "scatter_block: only a checkpoint's raw state (stored_population, coupling_field)");
+  check_block(lo, hi);
+  require(root >= 0 && root < m_grid.size(),
+          "scatter_block: root rank " + std::to_string(root) + " out of range");
+  if (m_grid.size() == 1) {
+    set_block(prop, lo, hi, std::vector<double>(values, values + count));
+    return;
+  }
+  const Vec3i n = hi - lo;
+  const bool is_root = m_grid.rank() == root;
+  // the root's checks, told to every rank: a refused block changes nothing
+  std::string error = is_root ? block_values_error(prop, nc, n, values, count) : std::string();
+  int length = static_cast<int>(error.size());
+  MPI_Bcast(&length, 1, MPI_INT, root, m_grid.comm());
+  if (length > 0) {
+    error.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(error.data(), length, MPI_CHAR, root, m_grid.comm());
+    throw InputError(error);
+  }
+  constexpr int tag = 77;
+  Vec3i first, extent;
+  std::vector<double> part;
+  auto set_part = [&] { // this rank's part, in `part`
+    block_part(m_grid.rank(), lo, hi, first, extent);
+    const double* v = part.data();
+    for_each_part_node(lo, n, first, extent, [&](std::size_t, const Vec3i& node) {
+      set_node_values(prop, node, v);
+      v += nc;
+    });
+  };
+  ++m_state_version;
+  if (!is_root) {
+    block_part(m_grid.rank(), lo, hi, first, extent);
+    part.resize(static_cast<std::size_t>(extent.prod()) * nc);
+    MPI_Recv(part.data(), mpi_count(part.size(), "scatter_block"), MPI_DOUBLE, root, tag,
+             m_grid.comm(), MPI_STATUS_IGNORE);
+    set_part();
+    return;
+  }
+  // the root packs and sends the parts one by one through one buffer
+  for (int r = 0; r < m_grid.size(); ++r) {
+    if (r == root)
+      continue;
+    block_part(r, lo, hi, first, extent);
+    part.clear();
+    for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
+      part.insert(part.end(), values + at * nc, values + (at + 1) * nc);
+    });
+    MPI_Send(part.data(), mpi_count(part.size(), "scatter_block"), MPI_DOUBLE, r, tag,
+             m_grid.comm());
+  }
+  block_part(root, lo, hi, first, extent);
+  part.clear();
+  for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
+    part.insert(part.end(), values + at * nc, values + (at + 1) * nc);
+  });
+  set_part();
 }
 
 int LBFluid::node_boundary(const Vec3i& node) const {
@@ -267,9 +440,10 @@ template <class Write> void write_on_root(MPI_Comm comm, int size, int rank, Wri
 
 void LBFluid::write_vtk_field(const std::string& path, const std::string& prop) const {
   require_flagged("the fluid's VTK output");
-  // (x, y, z) blocks come z fastest; VTK wants x fastest
-  const std::vector<double> block = get_block(prop, Vec3i::Zero(), m_global);
-  const std::size_t nc = block.size() / static_cast<std::size_t>(m_global.prod());
+  // (x, y, z) blocks come z fastest; VTK wants x fastest. Gathered on the
+  // writing rank only: the others hold their own part, no more.
+  const std::vector<double> block = gather_block(prop, Vec3i::Zero(), m_global, 0);
+  const std::size_t nc = static_cast<std::size_t>(block_components(prop));
   write_on_root(m_grid.comm(), m_grid.size(), m_grid.rank(), [&] {
     std::vector<double> data;
     data.reserve(block.size());

@@ -38,10 +38,11 @@ lb::Collision collision_of(const std::string& name) {
 
 /** Values of property prop on the block lo <= (i, j, k) < hi, shape
  *  (nx, ny, nz, components); collective under MPI (LBFluid::get_block). */
-RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
-                    const Vec3i& hi) {
-  collective_entry("a query of the fluid's nodes");
-  const std::vector<double> values = fluid.get_block(prop, lo, hi);
+/** A block's values as an array of shape (nx, ny, nz, components); no
+ *  values (a gather's other ranks): an empty array. */
+RealArray block_array(const std::vector<double>& values, const Vec3i& lo, const Vec3i& hi) {
+  if (values.empty())
+    return RealArray(std::vector<py::ssize_t>{0});
   const Vec3i n = hi - lo;
   const py::ssize_t nc = static_cast<py::ssize_t>(values.size() / n.prod());
   RealArray out({static_cast<py::ssize_t>(n[0]), static_cast<py::ssize_t>(n[1]),
@@ -50,10 +51,31 @@ RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& 
   return out;
 }
 
+RealArray get_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
+                    const Vec3i& hi) {
+  collective_entry("a query of the fluid's nodes");
+  return block_array(fluid.get_block(prop, lo, hi), lo, hi);
+}
+
 void set_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const Vec3i& hi,
                const RealArray& values) {
   collective_entry("setting the fluid's nodes");
   fluid.set_block(prop, lo, hi, std::vector<double>(values.data(), values.data() + values.size()));
+}
+
+/** gather_block: the block on rank `root` as get_block's array, an empty
+ *  array elsewhere; collective. */
+RealArray gather_block(const LBFluid& fluid, const std::string& prop, const Vec3i& lo,
+                       const Vec3i& hi, int root) {
+  collective_entry("a gather of the fluid's nodes");
+  return block_array(fluid.gather_block(prop, lo, hi, root), lo, hi);
+}
+
+void scatter_block(LBFluid& fluid, const std::string& prop, const Vec3i& lo, const Vec3i& hi,
+                   const RealArray& values, int root) {
+  collective_entry("setting the fluid's nodes");
+  // the values read in place (no copy: the root holds the whole block)
+  fluid.scatter_block(prop, lo, hi, values.data(), static_cast<std::size_t>(values.size()), root);
 }
 
 } // namespace
@@ -183,6 +205,8 @@ void bind_lb(py::module_& m) {
       .def("boundary_force", [](LBFluid& f, int b) { return f.boundary_force(b); })
       .def("get_block", &get_block)
       .def("set_block", &set_block)
+      .def("gather_block", &gather_block)
+      .def("scatter_block", &scatter_block)
       .def("write_vtk_velocity",
            [](LBFluid& f, const std::string& path) { f.write_vtk_velocity(path); })
       .def("write_vtk_boundary",

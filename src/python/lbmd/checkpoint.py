@@ -103,8 +103,9 @@ def system_state(system):
         system.prepare()  # collective: populations of the flagged lattice
         shape = tuple(int(n) for n in fluid.shape)
         for prop in ("stored_population", "coupling_field"):
-            block = np.asarray(fluid.get_block(prop, [0, 0, 0], list(shape)))
-            arrays[f"{prefix}/fluid/{prop}"] = block.reshape(shape + (-1,))
+            # on the writing rank only (rank 0): the others send their own
+            # nodes and hold no more (an empty array there, never written)
+            arrays[f"{prefix}/fluid/{prop}"] = np.asarray(fluid.gather_block(prop, [0, 0, 0], list(shape), 0))
         any_deposit, ledger_step, in_flight = core.coupling_ledger_state()
         fluid_state = {"n_updates": int(fluid.n_updates), "ledger": (bool(any_deposit), int(ledger_step),
                                                                      tuple(in_flight)),
@@ -185,11 +186,14 @@ def restore_system(system, state):
         system.prepare()  # collective: the restored boundaries flagged before the populations
         shape = [int(n) for n in fluid.shape]
         for prop in ("stored_population", "coupling_field"):
+            # read on rank 0 only (_OnRoot elsewhere); each rank receives its own nodes
             block = arrays[f"{prefix}/fluid/{prop}"]
             if list(block.shape[:3]) != shape:
                 raise CheckpointError(f"checkpoint: the fluid has {list(block.shape[:3])} nodes, "
                                       f"the restored lattice {shape}")
-            fluid.set_block(prop, [0, 0, 0], shape, np.ascontiguousarray(block, dtype=float).ravel())
+            values = (np.ascontiguousarray(block, dtype=float).ravel() if isinstance(block, np.ndarray)
+                      else np.zeros(0))
+            fluid.scatter_block(prop, [0, 0, 0], shape, values, 0)
         fluid.set_n_updates(saved["fluid"]["n_updates"])
         gains = saved["fluid"].get("open_gains", [])
         if gains and len(gains) == len(fluid.open_boundary_gains()):
@@ -339,6 +343,26 @@ def _read(path):
     return attrs, blob, arrays
 
 
+_LATTICE_BLOCKS = ("/fluid/stored_population", "/fluid/coupling_field")
+
+
+class _OnRoot:
+    """A lattice block that rank 0 holds; the other ranks know its shape."""
+
+    def __init__(self, shape):
+        self.shape = tuple(shape)
+
+
+def _without_lattice(result):
+    """What rank 0 broadcasts of a read checkpoint: the lattice blocks as
+    their shapes (_OnRoot), everything else as read."""
+    if isinstance(result, Exception):
+        return result
+    attrs, blob, arrays = result
+    return attrs, blob, {name: _OnRoot(value.shape) if name.endswith(_LATTICE_BLOCKS) else value
+                         for name, value in arrays.items()}
+
+
 def _require_arrays(arrays, names):
     """CheckpointError naming the first of the datasets missing."""
     for name in names:
@@ -363,7 +387,11 @@ def load(path):
         except CheckpointError as e:
             result = e
     if comm.Get_size() > 1:
-        result = comm.bcast(result, root=0)
+        # the lattice's blocks stay on rank 0 (scatter_block sends each rank
+        # its own nodes): the others get their shapes only
+        shared = comm.bcast(_without_lattice(result) if comm.Get_rank() == 0 else None, root=0)
+        if comm.Get_rank() != 0:
+            result = shared
     if isinstance(result, Exception):
         raise result
     attrs, blob, arrays = result
