@@ -125,7 +125,7 @@ class MpiLauncher(unittest.TestCase):
             shutil.rmtree(folder)
 
     def test_fluid_series_written_once(self):
-        """lbmd.vtk_output under MPI: every rank reads the nodes (collective),
+        """lbmd.vtk_output under MPI: each rank sends its own nodes to rank 0 (collective),
         rank 0 writes the .vti, .pvd and wall .vtp; the image holds the whole
         lattice whatever the rank count."""
         import os

@@ -29,7 +29,6 @@ FIELDS = {
 }
 
 _AXES = {"x": 0, "y": 1, "z": 2}
-_builtin_slice = slice  # FluidSeries' parameter 'slice' hides the builtin
 
 
 def import_vtk(owner):
@@ -222,7 +221,6 @@ class FluidSeries(TimeSeries):
         self.fluid = _check_fluid(owner, fluid)
         self.fields = check_names(owner, "fields", fields, FIELDS, allow_empty=False)
         shape = fluid.shape
-        self.key = (_builtin_slice(None),) * 3
         self.slice = None
         if slice is not None:
             if isinstance(slice, str) or not hasattr(slice, "__len__") or len(slice) != 2:
@@ -239,9 +237,6 @@ class FluidSeries(TimeSeries):
             if not 0 <= index < shape[axis]:
                 raise ValueError(f"{owner}: parameter 'slice': node index {index} is outside "
                                  f"[0, {shape[axis]}) on axis {'xyz'[axis]}")
-            key = [_builtin_slice(None)] * 3
-            key[int(axis)] = _builtin_slice(int(index), int(index) + 1)
-            self.key = tuple(key)
             self.slice = (int(axis), int(index))
 
     def _image(self, arrays):
@@ -262,12 +257,18 @@ class FluidSeries(TimeSeries):
         ``.pvd``; collective under MPI. Returns the step's ``.vti`` name."""
         time = self.check_step_time(time)
         _check_fluid("FluidSeries.write", self.fluid)
-        nodes = self.fluid[self.key]
+        core = self.fluid._collective_core()
+        lo, hi = [0, 0, 0], [int(n) for n in self.fluid.shape]
+        if self.slice is not None:
+            lo[self.slice[0]], hi[self.slice[0]] = self.slice[1], self.slice[1] + 1
         arrays = {}
-        for name in self.fields:  # collective: every rank reads the nodes
-            values = getattr(nodes, name)
-            arrays[name] = (np.asarray(values, dtype=np.int32) if name == "boundary"
-                            else np.asarray(values, dtype=np.float64))
+        for name in self.fields:
+            # collective: each rank sends its own nodes to the writing rank
+            # (rank 0), the only one that holds the whole field
+            block = np.asarray(core.gather_block(name, lo, hi, 0))
+            if block.size:
+                block = block if name == "velocity" else block[..., 0]
+                arrays[name] = block.astype(np.int32 if name == "boundary" else np.float64)
         return self.write_step(time, ".vti", self._vtk.vtkXMLImageDataWriter, lambda: self._image(arrays))
 
 
