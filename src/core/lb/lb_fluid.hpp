@@ -37,6 +37,7 @@
 #include "lb/boundary_links.hpp"
 #include "lb/collide_stream.hpp"
 #include "lb/coupling_nodes.hpp"
+#include "lb/halo_plan.hpp"
 #include "lb/lb_lattice.hpp"
 #include "lb/population_storage.hpp"
 #include "shapes/shape.hpp"
@@ -288,7 +289,7 @@ public:
    *  others it wraps onto this rank's own nodes), where every ghost has a
    *  velocity slot. */
   bool is_stencil_ghost(std::size_t n) const {
-    return !m_ghost_slot.empty() && m_ghost_slot[n] != no_ghost_slot;
+    return !m_halo.ghost_slot.empty() && m_halo.ghost_slot[n] != HaloPlan::no_ghost_slot;
   }
   /** A fluid ghost node: its velocity is its owner's (a solid one's is the
    *  boundary's, known here). */
@@ -301,7 +302,7 @@ public:
    *  lattice included (from refresh_ghost_velocities). */
   Vec3 coupling_velocity(std::size_t n) const {
     if (is_fluid_ghost(n))
-      return m_ghost_velocity[m_ghost_slot[n]];
+      return m_halo.ghost_velocity[m_halo.ghost_slot[n]];
     return velocity_at_index(n);
   }
   /** Difference of the padded indices of neighbours along axis d. */
@@ -488,55 +489,9 @@ private:
   std::uint64_t m_n_flaggings = 0;
   /// runs, links and bounce-back made from the flags (rebuild_geometry)
   FluidGeometry m_geometry;
-  /// first = ghost-layer place (population included), second = its
-  /// periodic image, for the halo exchange; fluid ones only
-  std::vector<PlaceRun> m_halo;
   std::size_t m_n_fluid_global = 0, m_n_links_global = 0;
-  /// The halo with one neighbouring rank: population places (q * stride +
-  /// node) of this rank's ghosts that the neighbour's faces fill (and that
-  /// are folded back into them), and of this rank's faces that fill the
-  /// neighbour's ghosts, each in the order both sides list them.
-  struct HaloPeer {
-    int rank = -1;
-    std::vector<std::size_t> ghost, face;
-    /// the coupling's ghost velocities: this rank's faces the neighbour
-    /// needs (nodes), and the m_ghost_velocity slot of each ghost it fills
-    std::vector<std::size_t> velocity_face;
-    std::vector<std::uint32_t> velocity_slot;
-    mutable std::vector<double> send, recv;
-    /// the population halo in single precision (MPI_FLOAT: half the bytes)
-    mutable std::vector<float> send_single, recv_single;
-    /// Two buffers of `capacity` doubles at `offset` bytes into a segment,
-    /// used in turn by round parity.
-    struct Buffers {
-      std::size_t offset = 0, capacity = 0;
-      template <typename T, typename Byte> T* at(Byte* segment, std::size_t parity) const {
-        return reinterpret_cast<T*>(segment + offset + parity * capacity * sizeof(double));
-      }
-    };
-    /// On the same machine the population halo goes through shared memory
-    /// (connect_shared_halo): this rank packs what it sends into its
-    /// segment (own_halo), the neighbour reads it from there, and this rank
-    /// reads the neighbour's (peer_halo of `shared`); the coupling's ghost
-    /// velocities likewise (a count, then 4 values per node, signalled by
-    /// an empty message per round). Empty `shared`: MPI messages.
-    PeerSegment shared;
-    Buffers own_halo, peer_halo, own_velocity, peer_velocity;
-  };
-  /// rounds of exchange_coupling_ghosts so far (their buffers' parity)
-  std::uint64_t m_coupling_rounds = 0;
-  std::vector<HaloPeer> m_peers;
-  /// this rank's halo buffers that neighbours on this machine read
-  SharedSegment m_halo_segment;
-  std::vector<Vec3> m_ghost_velocity;
-  /// padded index -> slot in m_ghost_velocity (no_ghost_slot: none), on a
-  /// decomposed lattice: a dense table (4 bytes a node against the
-  /// populations' 76 or more) because the coupling looks up every node it
-  /// reads, at every step
-  std::vector<std::uint32_t> m_ghost_slot;
-  std::vector<std::size_t> m_ghost_node; ///< slot -> padded index
-  static constexpr std::uint32_t no_ghost_slot = ~std::uint32_t{0};
-  std::uint64_t m_ghost_velocity_version = ~std::uint64_t{0};
+  /// the halo's plan and buffers (halo_plan.hpp), made by build_halo_pairs
+  HaloPlan m_halo;
   mutable double m_halo_seconds = 0.0, m_coupling_exchange_seconds = 0.0;
   std::array<std::ptrdiff_t, d3q19::Q> m_offset{};
   Vec3 m_ext_lattice = Vec3::Zero();

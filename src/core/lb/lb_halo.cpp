@@ -83,18 +83,18 @@ void LBFluid::build_halo_pairs() {
   // that is region o of the neighbour at -o, both listed by visit_region
   // over the ghost owner's subdomain.
   std::vector<PlaceRun> pairs;
-  m_peers.clear();
-  m_ghost_slot.clear();
-  m_ghost_node.clear();
-  m_ghost_velocity.clear();
-  m_ghost_velocity_version = ~std::uint64_t{0};
+  m_halo.peers.clear();
+  m_halo.ghost_slot.clear();
+  m_halo.ghost_node.clear();
+  m_halo.ghost_velocity.clear();
+  m_halo.ghost_velocity_version = ~std::uint64_t{0};
   auto peer = [&](int rank) -> HaloPeer& {
-    for (HaloPeer& p : m_peers)
+    for (HaloPeer& p : m_halo.peers)
       if (p.rank == rank)
         return p;
-    m_peers.emplace_back();
-    m_peers.back().rank = rank;
-    return m_peers.back();
+    m_halo.peers.emplace_back();
+    m_halo.peers.back().rank = rank;
+    return m_halo.peers.back();
   };
   const Vec3i me = m_grid.coords();
   for (int oz = -1; oz <= 1; ++oz)
@@ -143,33 +143,33 @@ void LBFluid::build_halo_pairs() {
         visit_region(m_origin, m_n, o, false, [&](const Vec3i& g, int) {
           const std::size_t ghost =
               index(g[0] - m_origin[0] + 1, g[1] - m_origin[1] + 1, g[2] - m_origin[2] + 1);
-          if (m_ghost_slot.empty())
-            m_ghost_slot.assign(m_pop.stride(), no_ghost_slot);
-          if (m_ghost_slot[ghost] == no_ghost_slot) {
-            m_ghost_slot[ghost] = static_cast<std::uint32_t>(m_ghost_velocity.size());
-            m_ghost_velocity.emplace_back(Vec3::Zero());
-            m_ghost_node.push_back(ghost);
+          if (m_halo.ghost_slot.empty())
+            m_halo.ghost_slot.assign(m_pop.stride(), HaloPlan::no_ghost_slot);
+          if (m_halo.ghost_slot[ghost] == HaloPlan::no_ghost_slot) {
+            m_halo.ghost_slot[ghost] = static_cast<std::uint32_t>(m_halo.ghost_velocity.size());
+            m_halo.ghost_velocity.emplace_back(Vec3::Zero());
+            m_halo.ghost_node.push_back(ghost);
           }
-          in.velocity_slot.push_back(m_ghost_slot[ghost]);
+          in.velocity_slot.push_back(m_halo.ghost_slot[ghost]);
         });
         visit_region(m_grid.lower(c_behind), m_grid.extent(c_behind), o, false,
                      [&](const Vec3i& g, int) { out.velocity_face.push_back(domain_index(g)); });
       }
-  m_halo = merge_place_runs(std::move(pairs));
+  m_halo.local = merge_place_runs(std::move(pairs));
   connect_shared_halo();
 }
 
 int LBFluid::shared_halo_peers() const {
   require_flagged("the shared-memory halo peers");
   int n = 0;
-  for (const HaloPeer& p : m_peers)
+  for (const HaloPeer& p : m_halo.peers)
     n += p.shared ? 1 : 0;
   return n;
 }
 
 void LBFluid::connect_shared_halo() {
-  m_halo_segment = SharedSegment();
-  if (m_peers.empty())
+  m_halo.segment = SharedSegment();
+  if (m_halo.peers.empty())
     return;
   // this rank's segment: per neighbour two buffers (update parity) of as
   // many values as the larger of its two lists (a fill sends the faces, a
@@ -180,27 +180,28 @@ void LBFluid::connect_shared_halo() {
     b.offset = SharedSegment::header + bytes;
     bytes += 2 * b.capacity * sizeof(double);
   };
-  for (HaloPeer& p : m_peers) {
+  for (HaloPeer& p : m_halo.peers) {
     reserve(p.own_halo, std::max(p.face.size(), p.ghost.size()));
     reserve(p.own_velocity, 1 + 4 * p.velocity_face.size());
   }
-  m_coupling_rounds = 0;
+  m_halo.coupling_rounds = 0;
   const char* setting = std::getenv("PYOIF_HALO_SHARED");
   const bool wanted = !(setting && std::string(setting) == "0");
   if (wanted)
-    m_halo_segment = SharedSegment(bytes);
+    m_halo.segment = SharedSegment(bytes);
   // the offer to each neighbour: pid, descriptor, size, cookie, the offsets
   // of its buffers (all zero: no segment); then whether each mapped the other's
-  const bool offered = m_halo_segment.data() != nullptr;
+  const bool offered = m_halo.segment.data() != nullptr;
   constexpr int fields = 8;
   auto exchange = [&](auto make_send, int tag) {
-    std::vector<std::uint64_t> send(fields * m_peers.size()), recv(fields * m_peers.size());
+    std::vector<std::uint64_t> send(fields * m_halo.peers.size()),
+        recv(fields * m_halo.peers.size());
     NeighbourExchange round(m_grid.comm(), tag);
-    for (std::size_t k = 0; k < m_peers.size(); ++k)
-      round.receive(m_peers[k].rank, recv.data() + fields * k, fields);
-    for (std::size_t k = 0; k < m_peers.size(); ++k) {
-      make_send(m_peers[k], send.data() + fields * k);
-      round.send(m_peers[k].rank, send.data() + fields * k, fields);
+    for (std::size_t k = 0; k < m_halo.peers.size(); ++k)
+      round.receive(m_halo.peers[k].rank, recv.data() + fields * k, fields);
+    for (std::size_t k = 0; k < m_halo.peers.size(); ++k) {
+      make_send(m_halo.peers[k], send.data() + fields * k);
+      round.send(m_halo.peers[k].rank, send.data() + fields * k, fields);
     }
     round.wait();
     return recv;
@@ -208,17 +209,17 @@ void LBFluid::connect_shared_halo() {
   const std::vector<std::uint64_t> offers = exchange(
       [&](const HaloPeer& p, std::uint64_t* out) {
         out[0] = offered ? static_cast<std::uint64_t>(getpid()) : 0;
-        out[1] = offered ? static_cast<std::uint64_t>(m_halo_segment.fd()) : 0;
-        out[2] = offered ? m_halo_segment.size() - SharedSegment::header : 0;
-        out[3] = offered ? m_halo_segment.cookie() : 0;
+        out[1] = offered ? static_cast<std::uint64_t>(m_halo.segment.fd()) : 0;
+        out[2] = offered ? m_halo.segment.size() - SharedSegment::header : 0;
+        out[3] = offered ? m_halo.segment.cookie() : 0;
         out[4] = p.own_halo.offset;
         out[5] = p.own_halo.capacity;
         out[6] = p.own_velocity.offset;
         out[7] = p.own_velocity.capacity;
       },
       74);
-  for (std::size_t k = 0; k < m_peers.size(); ++k) {
-    HaloPeer& p = m_peers[k];
+  for (std::size_t k = 0; k < m_halo.peers.size(); ++k) {
+    HaloPeer& p = m_halo.peers[k];
     const std::uint64_t* o = offers.data() + fields * k;
     // (the neighbour's lists for this rank are as long as this rank's for it)
     if (offered && o[0] != 0 && o[5] == p.own_halo.capacity)
@@ -234,24 +235,24 @@ void LBFluid::connect_shared_halo() {
       },
       75);
   bool any = false;
-  for (std::size_t k = 0; k < m_peers.size(); ++k) {
-    HaloPeer& p = m_peers[k];
+  for (std::size_t k = 0; k < m_halo.peers.size(); ++k) {
+    HaloPeer& p = m_halo.peers[k];
     if (!(p.shared && mapped[fields * k] == 1))
       p.shared = PeerSegment(); // one way only: both use messages
     any |= static_cast<bool>(p.shared);
   }
-  m_halo_segment.close_fd(); // every neighbour has tried to open it
+  m_halo.segment.close_fd(); // every neighbour has tried to open it
   if (!any)
-    m_halo_segment = SharedSegment();
+    m_halo.segment = SharedSegment();
 }
 
 template <typename Real> void LBFluid::pack_shared_halo(const Real* f, bool fill_ghosts) const {
   const std::size_t parity = m_updates & 1u;
-  for (const HaloPeer& p : m_peers) {
+  for (const HaloPeer& p : m_halo.peers) {
     if (!p.shared)
       continue;
     const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
-    Real* to = p.own_halo.at<Real>(m_halo_segment.data(), parity);
+    Real* to = p.own_halo.at<Real>(m_halo.segment.data(), parity);
     for (std::size_t i = 0; i < out.size(); ++i)
       to[i] = f[out[i]];
   }
@@ -262,7 +263,7 @@ template <typename Real> void LBFluid::pack_shared_halo(const Real* f, bool fill
 std::size_t LBFluid::halo_bytes() const {
   require_flagged("the halo size");
   std::size_t n = 0;
-  for (const HaloPeer& p : m_peers)
+  for (const HaloPeer& p : m_halo.peers)
     n += p.face.size(); // sent by a fill, as many as the ghosts folded back
   return n * m_pop.value_bytes();
 }
@@ -299,13 +300,13 @@ void scatter_places(const Real* in, const std::vector<std::size_t>& places, Real
 } // namespace
 
 template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts) const {
-  if (m_peers.empty())
+  if (m_halo.peers.empty())
     return;
   // fill: faces out, ghosts in; fold: ghosts out, faces in (a copy, as in
   // the periodic case: the face slot receives the population the
   // neighbour's node pushed across, its only value in this update)
   NeighbourExchange round(m_grid.comm(), 71);
-  for (const HaloPeer& p : m_peers) {
+  for (const HaloPeer& p : m_halo.peers) {
     if (p.shared)
       continue;
     const std::vector<std::size_t>& in = fill_ghosts ? p.ghost : p.face;
@@ -313,7 +314,7 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
     recv.resize(in.size());
     round.receive(p.rank, recv.data(), recv.size());
   }
-  for (const HaloPeer& p : m_peers) {
+  for (const HaloPeer& p : m_halo.peers) {
     if (p.shared)
       continue;
     const std::vector<std::size_t>& out = fill_ghosts ? p.face : p.ghost;
@@ -333,12 +334,12 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
   // done here: no other wait is needed.
   std::atomic_thread_fence(std::memory_order_acquire);
   const std::size_t parity = m_updates & 1u;
-  for (const HaloPeer& p : m_peers)
+  for (const HaloPeer& p : m_halo.peers)
     if (p.shared)
       scatter_places(p.peer_halo.at<const Real>(p.shared.data(), parity),
                      fill_ghosts ? p.ghost : p.face, f);
   round.wait();
-  for (const HaloPeer& p : m_peers)
+  for (const HaloPeer& p : m_halo.peers)
     if (!p.shared)
       scatter_places(halo_buffer<Real>(p.recv, p.recv_single).data(),
                      fill_ghosts ? p.ghost : p.face, f);
@@ -346,16 +347,16 @@ template <typename Real> void LBFluid::exchange_remote(Real* f, bool fill_ghosts
 
 void LBFluid::refresh_ghost_velocities() {
   require_flagged("the fluid velocity at a point");
-  if (m_peers.empty() || m_ghost_velocity_version == m_state_version)
+  if (m_halo.peers.empty() || m_halo.ghost_velocity_version == m_state_version)
     return;
   const auto start = std::chrono::steady_clock::now();
   // (the peers' halo buffers: this exchange never overlaps a halo step)
   NeighbourExchange round(m_grid.comm(), 72);
-  for (const HaloPeer& peer : m_peers) {
+  for (const HaloPeer& peer : m_halo.peers) {
     peer.recv.resize(3 * peer.velocity_slot.size());
     round.receive(peer.rank, peer.recv.data(), peer.recv.size());
   }
-  for (const HaloPeer& peer : m_peers) {
+  for (const HaloPeer& peer : m_halo.peers) {
     peer.send.clear();
     for (const std::size_t n : peer.velocity_face) {
       const Vec3 u = velocity_at_index(n);
@@ -364,18 +365,18 @@ void LBFluid::refresh_ghost_velocities() {
     round.send(peer.rank, peer.send.data(), peer.send.size());
   }
   round.wait();
-  for (const HaloPeer& peer : m_peers)
+  for (const HaloPeer& peer : m_halo.peers)
     for (std::size_t i = 0; i < peer.velocity_slot.size(); ++i)
-      m_ghost_velocity[peer.velocity_slot[i]] =
+      m_halo.ghost_velocity[peer.velocity_slot[i]] =
           Vec3(peer.recv[3 * i], peer.recv[3 * i + 1], peer.recv[3 * i + 2]);
-  m_ghost_velocity_version = m_state_version;
+  m_halo.ghost_velocity_version = m_state_version;
   m_coupling_exchange_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
   list.ghosts_pending = false;
-  if (m_peers.empty())
+  if (m_halo.peers.empty())
     return;
   const auto start = std::chrono::steady_clock::now();
   const std::uint64_t* needed = list.needed.data();
@@ -389,7 +390,7 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
   // rounds on, after the neighbour's empty message of the next round, which
   // it sends only after reading.
   constexpr std::size_t per = 4;
-  const std::size_t parity = m_coupling_rounds++ & 1u;
+  const std::size_t parity = m_halo.coupling_rounds++ & 1u;
   auto pack = [&](const HaloPeer& peer, double* out) {
     std::size_t k = 0;
     if (with_values)
@@ -407,13 +408,13 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
     return k;
   };
   NeighbourExchange round(m_grid.comm(), 73);
-  for (const HaloPeer& peer : m_peers) {
+  for (const HaloPeer& peer : m_halo.peers) {
     peer.recv.resize(peer.shared ? 0 : per * peer.velocity_slot.size());
-    round.receive(peer.rank, peer.recv.data(), peer.recv.size()); // k-th receive: m_peers[k]
+    round.receive(peer.rank, peer.recv.data(), peer.recv.size()); // k-th receive: m_halo.peers[k]
   }
-  for (const HaloPeer& peer : m_peers) {
+  for (const HaloPeer& peer : m_halo.peers) {
     if (peer.shared) {
-      double* out = peer.own_velocity.at<double>(m_halo_segment.data(), parity);
+      double* out = peer.own_velocity.at<double>(m_halo.segment.data(), parity);
       out[0] = static_cast<double>(pack(peer, out + 1));
       std::atomic_thread_fence(std::memory_order_release);
       peer.send.clear(); // the empty message
@@ -426,8 +427,8 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
   round.wait();
   std::atomic_thread_fence(std::memory_order_acquire);
   if (with_values)
-    for (std::size_t k = 0; k < m_peers.size(); ++k) {
-      const HaloPeer& peer = m_peers[k];
+    for (std::size_t k = 0; k < m_halo.peers.size(); ++k) {
+      const HaloPeer& peer = m_halo.peers[k];
       const double* in = peer.recv.data();
       int received = 0;
       if (peer.shared) {
@@ -438,7 +439,8 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
         received = static_cast<int>(round.received(k));
       }
       for (std::size_t j = 0; j + per <= static_cast<std::size_t>(received); j += per) {
-        const std::size_t n = m_ghost_node[peer.velocity_slot[static_cast<std::size_t>(in[j])]];
+        const std::size_t n =
+            m_halo.ghost_node[peer.velocity_slot[static_cast<std::size_t>(in[j])]];
         if (is_fluid_ghost(n) && listed(n))
           state[entry[n]].velocity = Vec3(in[j + 1], in[j + 2], in[j + 3]);
       }
@@ -448,8 +450,8 @@ void LBFluid::exchange_coupling_ghosts(CouplingNodes& list, bool with_values) {
 }
 
 template <typename Real> void LBFluid::halo_exchange(Real* f, bool fill_ghosts) const {
-  apply_place_runs(f, m_halo, fill_ghosts);
-  if (m_peers.empty())
+  apply_place_runs(f, m_halo.local, fill_ghosts);
+  if (m_halo.peers.empty())
     return;
   const auto start = std::chrono::steady_clock::now();
   exchange_remote(f, fill_ghosts);

@@ -104,7 +104,7 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
     // every rank learns of a bad node anywhere (the lowest rank's is
     // reported by all), before anyone waits for a halo that will not come
     int failing = first_bad < n_runs ? m_grid.rank() : m_grid.size();
-    if (m_halo_segment.data()) { // (the agreement also tells the neighbours it is packed)
+    if (m_halo.segment.data()) { // (the agreement also tells the neighbours it is packed)
       const auto start = std::chrono::steady_clock::now();
       pack_shared_halo(f, even);
       m_halo_seconds +=
