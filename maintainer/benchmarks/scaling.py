@@ -37,6 +37,10 @@ max/mean); the least of --repeats runs counts (made in rounds over all
 configurations, so that a burst of load does not hit every run of one).
 Printed per configuration:
 seconds per 1000 steps, the cost per cell (t(n) - t(0)) / n, the speed-up
+(beside it, the memory-bandwidth limit of a K-rank speed-up on this
+machine: the STREAM-like copy with K threads over 1 thread, the best of
+the copies made at the start of each round, and the fluid alone's speed-up
+as a share of it),
 t1/tK and efficiency t1/(K tK), the load balance, the communication (halo +
 coupling exchanges, waiting included) per step, the halo bytes a rank sends
 per lattice update (lbf._core.halo_bytes, the largest over ranks; one
@@ -598,6 +602,17 @@ def measure_all(args, ranks_list):
     results = {}  # (cells, height) -> {ranks: data}
     heights = {}  # cells -> height measured at
     no_room = {}
+    bandwidth = {}
+
+    def copy_bandwidths():
+        """The best copy bandwidth so far with 1 thread and with each rank
+        count's threads (two cores' threads share the memory as two ranks
+        do): what bounds a memory-bound speed-up on this machine."""
+        from lbmd import _lbmd
+        for k in [1] + [k for k in ranks_list if k > 1]:
+            threads = min(k, os.cpu_count() or 1)
+            bw = _lbmd.copy_bandwidth(1 << 25, 5, threads)
+            bandwidth[k] = max(bandwidth.get(k, 0.0), bw)
 
     def keep(n, h, k, d):
         """Keep the quieter of the runs of a configuration."""
@@ -612,6 +627,7 @@ def measure_all(args, ranks_list):
         todo = [(n, FULL_HEIGHT) for n in sorted(set(args.cells))]
         configs = []
         print(f"round 1 of {args.repeats}", flush=True)
+        copy_bandwidths()
         while todo:
             n, h = todo.pop(0)
             try:
@@ -632,6 +648,7 @@ def measure_all(args, ranks_list):
                     no_room[n] = str(e)
         for r in range(1, args.repeats):
             print(f"round {r + 1} of {args.repeats}", flush=True)
+            copy_bandwidths()
             for n, h in configs:
                 for k in ranks_list:
                     keep(n, h, k, run_once(args, n, k, h, tmp))
@@ -642,7 +659,7 @@ def measure_all(args, ranks_list):
               f"load average (1 min) {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after\n  "
               + engine_before + ("" if engine_after == engine_before else
                                  f"; CHANGED during the measurement, now {engine_after}"))
-    return results, heights, no_room, header
+    return results, heights, no_room, header, bandwidth
 
 
 # ------------------------------------------------------------------- main
@@ -692,13 +709,15 @@ def main():
         with open(args.load_runs, "rb") as f:
             saved = pickle.load(f)
         results, heights, no_room, header = (saved[k] for k in ("results", "heights", "no_room", "header"))
+        bandwidth = saved.get("bandwidth", {})
         header = f"{header} (runs read from {args.load_runs})"
         ranks_list = sorted({k for by_k in results.values() for k in by_k})
     else:
-        results, heights, no_room, header = measure_all(args, ranks_list)
+        results, heights, no_room, header, bandwidth = measure_all(args, ranks_list)
         if args.save_runs:
             with open(args.save_runs, "wb") as f:
-                pickle.dump(dict(results=results, heights=heights, no_room=no_room, header=header), f)
+                pickle.dump(dict(results=results, heights=heights, no_room=no_room, header=header,
+                                 bandwidth=bandwidth), f)
 
     # --- measured table
     print()
@@ -739,7 +758,7 @@ def main():
                          "resorts_per_step": d.get("rebuilds", 0) / rep["steps"],
                          "lattice_share": d["timings"]["lb_fluid"] / d["timings"]["total"], "decomposition": dec,
                          "paper_one_core_s": PAPER[1].get(n, ""),
-                         "paper_ten_cores_s": PAPER[10].get(n, "")})
+                         "paper_ten_cores_s": PAPER[10].get(n, ""), "bandwidth_limit": ""})
     for n, why in no_room.items():
         print(f"{n:6d} RBCs: does not fit the sample's seeding region ({why})")
     print("  s/cell: (t(n) - t(0)) / n per 1000 steps (same height); comm: halo + coupling exchanges "
@@ -748,6 +767,21 @@ def main():
           "every rank computes every particle) or 24 per particle whose stencil reaches the rank but whose cell "
           "another rank owns (\"work spread\": each cell's particles computed by the rank of its first node; "
           "busiest rank)")
+    for k in ranks_list:
+        if k > 1 and k in bandwidth and 1 in bandwidth:
+            # the fluid alone is memory-bound: its speed-up cannot pass what
+            # the memory gives k threads over one
+            limit = bandwidth[k] / bandwidth[1]
+            fluid = results.get((0, FULL_HEIGHT), {})
+            seen = (f"; the fluid alone (0 RBCs) sped up {per_step(fluid[1]) / per_step(fluid[k]):.2f}x = "
+                    f"{100 * per_step(fluid[1]) / per_step(fluid[k]) / limit:.0f} % of it"
+                    if 1 in fluid and k in fluid else "")
+            print(f"  memory-bandwidth limit of a {k}-rank speed-up: copy with {min(k, os.cpu_count() or 1)} "
+                  f"threads / 1 thread = {bandwidth[k] / 1e9:.1f} / {bandwidth[1] / 1e9:.1f} GB/s = "
+                  f"{limit:.2f}{seen} (best copies of the rounds, measured beside the runs)")
+            for row in rows:
+                if row["ranks"] == k:
+                    row["bandwidth_limit"] = limit
     print("  paper (Table 1, CPU s / 1000 steps, 1 core / 10 cores): "
           + ", ".join(f"{n}: {PAPER[1][n]:.2f} / {PAPER[10][n]:.2f}" for n in sorted(PAPER[1])))
     write_rows(args.csv, rows)
