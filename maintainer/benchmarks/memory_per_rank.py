@@ -25,7 +25,9 @@ the steps: the resident set (VmRSS) and its peak (VmHWM) from
 particles (the engine's particle arrays: n_local, as stored) and the
 lattice (this rank's subdomain with its ghost layer, 19 populations).
 Printed per K: the largest rank's figures and their ratio to the 1-rank
-figure; written: CSV (one row per rank) and a chart of the largest rank's
+figure, and what each stage added to the resident set (the interpreter
+and libraries at the start; the cells made; the fluid added, coupled and
+flagged; the steps run: ghosts, pair lists, the coupling's records); written: CSV (one row per rank) and a chart of the largest rank's
 resident set against K beside the ideal 1/K.
 """
 import argparse
@@ -69,6 +71,7 @@ def child(cells, steps, out):
     import oif
     from lbmd import lb
 
+    stages = {"start": status_mb("VmRSS")}
     nx, ny, nz = grid_for(cells)
     box = [nx * ACROSS, ny * ACROSS, nz * ALONG]
     system = lbmd.System(box_l=box)
@@ -85,18 +88,25 @@ def child(cells, steps, out):
                 oif.OifCell(cell_type=rbc, particle_type=0,
                             origin=[(i + 0.5) * ACROSS, (j + 0.5) * ACROSS, (k + 0.5) * ALONG])
                 made += 1
+    stages["cells"] = status_mb("VmRSS")
     lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1)
     system.actors.add(lbf)
     system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
     oif.set_contacts(system, rbc, particle_types=0)
+    system.prepare()
+    stages["fluid"] = status_mb("VmRSS")
     system.integrator.run(steps)
+    stages["run"] = status_mb("VmRSS")
     core = system._core
     local = [int(n) for n in lbf._core.local_shape]
     report = {"rank": lbmd.rank, "ranks": lbmd.size, "cells": made, "nodes": int(len(system.part.all().id)),
               "box": box, "lattice": [int(n) for n in lbf.shape], "local_lattice": local,
               "particles_stored": int(core.n_particles()),
               "lattice_mb": 19 * 8 * float(np.prod([n + 2 for n in local])) / 2 ** 20,
-              "rss_mb": status_mb("VmRSS"), "peak_mb": status_mb("VmHWM")}
+              "rss_mb": status_mb("VmRSS"), "peak_mb": status_mb("VmHWM"),
+              # what each stage added to the resident set
+              "start_mb": stages["start"], "cells_mb": stages["cells"] - stages["start"],
+              "fluid_mb": stages["fluid"] - stages["cells"], "run_mb": stages["run"] - stages["fluid"]}
     reports = lbmd.comm.gather(report, root=0)
     if lbmd.rank == 0:
         with open(out, "w") as f:
@@ -139,7 +149,8 @@ def main():
     print(f"{first['cells']} rbc374 cells, {first['nodes']} membrane nodes, lattice "
           f"{'x'.join(str(n) for n in first['lattice'])} (box {' x '.join(f'{b:g}' for b in first['box'])} um)")
     print(f"{'ranks':>5s} {'rank':>4s} {'local lattice':>14s} {'lattice MB':>10s} {'particles':>9s} "
-          f"{'RSS MB':>8s} {'peak MB':>8s} {'RSS / 1 rank':>12s}")
+          f"{'RSS MB':>8s} {'peak MB':>8s} {'RSS / 1 rank':>12s} | {'start':>6s} {'+cells':>6s} {'+fluid':>6s} "
+          f"{'+run':>6s}")
     rows = []
     ref = max(r["rss_mb"] for r in per_k[1])
     for k in sorted(per_k):
@@ -147,7 +158,8 @@ def main():
             stored = str(r["particles_stored"])
             print(f"{k:5d} {r['rank']:4d} {'x'.join(str(n) for n in r['local_lattice']):>14s} "
                   f"{r['lattice_mb']:10.1f} {stored:>9s} {r['rss_mb']:8.0f} {r['peak_mb']:8.0f} "
-                  f"{r['rss_mb'] / ref:12.2f}")
+                  f"{r['rss_mb'] / ref:12.2f} | {r['start_mb']:6.0f} {r['cells_mb']:6.0f} {r['fluid_mb']:6.0f} "
+                  f"{r['run_mb']:6.0f}")
             rows.append(dict(r, local_lattice="x".join(str(n) for n in r["local_lattice"]),
                              lattice="x".join(str(n) for n in r["lattice"]), box=" ".join(f"{b:g}" for b in r["box"]),
                              rss_over_one_rank=r["rss_mb"] / ref))
