@@ -153,6 +153,16 @@ TEST(NeighbourSearch, ExclusionsAreHonoured) {
   s.cells.remove_exclusions_of(1);
   s.compute_forces();
   EXPECT_EQ(s.cells.pairs().size(), 3u);
+  // a pair added twice (either order) is one pair, which one removal takes
+  s.cells.add_exclusion(1, 2);
+  s.cells.add_exclusion(2, 1);
+  s.cells.add_exclusion(0, 2);
+  EXPECT_TRUE(s.cells.excluded(2, 1)); // read before any pair build
+  EXPECT_EQ(s.cells.exclusion_pairs(), (std::vector<std::array<int, 2>>{{0, 2}, {1, 2}}));
+  s.cells.remove_exclusion(1, 2);
+  EXPECT_FALSE(s.cells.excluded(1, 2));
+  s.compute_forces();
+  EXPECT_EQ(s.cells.pairs().size(), 2u);
 }
 
 TEST(NeighbourSearch, RangeLargerThanBoxIsAnError) {

@@ -99,6 +99,7 @@ bool positive(const Vec3i& s) {
 } // namespace
 
 void CellSystem::build_exclusion_lists() {
+  sort_exclusions();
   int max_id = -1;
   for (const std::uint64_t k : m_exclusions)
     max_id = std::max(max_id, static_cast<int>(k & 0xffffffffu)); // the larger id of the pair

@@ -179,8 +179,9 @@ def restore_system(system, state):
         if ids.size:
             core.add_bonds(bond_id, np.ascontiguousarray(ids.ravel(), dtype=np.int32),
                            np.ascontiguousarray(arrays[f"{prefix}/bonds/{bond_id}/per_bond"], dtype=float))
-    for a, b in arrays[f"{prefix}/particles/exclusions"]:
-        core.add_exclusion(int(a), int(b))
+    exclusions = np.asarray(arrays[f"{prefix}/particles/exclusions"], dtype=np.int32).reshape(-1, 2)
+    if len(exclusions):
+        core.add_exclusions(np.ascontiguousarray(exclusions))  # in one call: millions for dense scenes
     fluid = system._core_fluid()
     if fluid is not None and saved["fluid"] is not None:
         system.prepare()  # collective: the restored boundaries flagged before the populations
