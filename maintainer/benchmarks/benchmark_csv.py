@@ -1,5 +1,6 @@
 """What every benchmark here does at the end: write its rows (dicts with the
-same keys) as CSV and say where."""
+same keys) as CSV and say where; and the memory figures the memory
+benchmarks read (Linux /proc)."""
 import csv
 import os
 
@@ -13,3 +14,16 @@ def write_rows(path, rows):
         w.writeheader()
         w.writerows(rows)
     print(f"written {os.path.abspath(path)}")
+
+
+def status_mb(field):
+    """A memory line of /proc/self/status (VmRSS, VmHWM, ...) in MB; NaN
+    where there is none."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float("nan")

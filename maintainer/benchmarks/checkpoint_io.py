@@ -32,15 +32,7 @@ import lbmd
 HERE = os.path.dirname(os.path.abspath(__file__))
 SAMPLE = os.path.join(HERE, "..", "..", "samples", "cell_flow_in_bifurcation.py")
 sys.path.insert(0, HERE)
-from benchmark_csv import write_rows  # noqa: E402
-
-
-def _status_kb(field):
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(field + ":"):
-                return int(line.split()[1])
-    return 0
+from benchmark_csv import status_mb, write_rows  # noqa: E402
 
 
 def _peak_above_resident(action):
@@ -50,9 +42,9 @@ def _peak_above_resident(action):
             f.write("5")  # the peak resident set starts again from the current one
     except OSError:
         pass
-    start = _status_kb("VmRSS")
+    start = status_mb("VmRSS")
     result = action()
-    return result, max(0, _status_kb("VmHWM") - start) / 1024.0
+    return result, max(0.0, status_mb("VmHWM") - start)
 
 
 def main():

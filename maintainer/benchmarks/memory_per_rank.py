@@ -39,18 +39,10 @@ import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from benchmark_csv import write_rows  # noqa: E402
+from benchmark_csv import status_mb, write_rows  # noqa: E402
 
 RADIUS = 3.91
 ACROSS, ALONG = 9.0, 4.0  # grid spacing of the stacked discs (um; whole lattice spacings)
-
-
-def status_mb(field):
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(field + ":"):
-                return int(line.split()[1]) / 1024.0
-    return float("nan")
 
 
 def grid_for(n_cells):

@@ -251,31 +251,35 @@ std::vector<double> LBFluid::gather_block(const std::string& prop, const Vec3i& 
   if (m_grid.size() == 1)
     return get_block(prop, lo, hi);
   const Vec3i n = hi - lo;
-  Vec3i first, extent;
-  block_part(m_grid.rank(), lo, hi, first, extent);
-  std::vector<double> part(static_cast<std::size_t>(extent.prod()) * nc);
-  std::size_t k = 0;
-  for_each_part_node(lo, n, first, extent, [&](std::size_t, const Vec3i& node) {
-    node_values(prop, node, part.data() + k);
-    k += nc;
-  });
   constexpr int tag = 76;
-  if (m_grid.rank() != root) {
+  Vec3i first, extent;
+  if (m_grid.rank() != root) { // this rank's nodes, in the block's order
+    block_part(m_grid.rank(), lo, hi, first, extent);
+    std::vector<double> part(static_cast<std::size_t>(extent.prod()) * nc);
+    double* o = part.data();
+    for_each_part_node(lo, n, first, extent, [&](std::size_t, const Vec3i& node) {
+      node_values(prop, node, o);
+      o += nc;
+    });
     MPI_Send(part.data(), mpi_count(part.size(), "gather_block"), MPI_DOUBLE, root, tag,
              m_grid.comm());
     return {};
   }
-  // the root takes the others' parts one by one into one buffer: it holds
-  // the block, its own part and one other, not every part besides
+  // the root writes its own nodes in place and takes the others' parts one
+  // by one into one buffer: it holds the block and one part, no more
   std::vector<double> out(static_cast<std::size_t>(n.prod()) * nc), received;
   for (int r = 0; r < m_grid.size(); ++r) {
     block_part(r, lo, hi, first, extent);
-    if (r != root) {
-      received.resize(static_cast<std::size_t>(extent.prod()) * nc);
-      MPI_Recv(received.data(), mpi_count(received.size(), "gather_block"), MPI_DOUBLE, r, tag,
-               m_grid.comm(), MPI_STATUS_IGNORE);
+    if (r == root) {
+      for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i& node) {
+        node_values(prop, node, out.data() + at * nc);
+      });
+      continue;
     }
-    const double* in = r == root ? part.data() : received.data();
+    received.resize(static_cast<std::size_t>(extent.prod()) * nc);
+    MPI_Recv(received.data(), mpi_count(received.size(), "gather_block"), MPI_DOUBLE, r, tag,
+             m_grid.comm(), MPI_STATUS_IGNORE);
+    const double* in = received.data();
     for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
       std::copy(in, in + nc, out.data() + at * nc);
       in += nc;
@@ -312,28 +316,29 @@ void LBFluid::scatter_block(const std::string& prop, const Vec3i& lo, const Vec3
   constexpr int tag = 77;
   Vec3i first, extent;
   std::vector<double> part;
-  auto set_part = [&] { // this rank's part, in `part`
+  ++m_state_version;
+  if (!is_root) { // this rank's nodes, in the block's order
     block_part(m_grid.rank(), lo, hi, first, extent);
+    part.resize(static_cast<std::size_t>(extent.prod()) * nc);
+    MPI_Recv(part.data(), mpi_count(part.size(), "scatter_block"), MPI_DOUBLE, root, tag,
+             m_grid.comm(), MPI_STATUS_IGNORE);
     const double* v = part.data();
     for_each_part_node(lo, n, first, extent, [&](std::size_t, const Vec3i& node) {
       set_node_values(prop, node, v);
       v += nc;
     });
-  };
-  ++m_state_version;
-  if (!is_root) {
-    block_part(m_grid.rank(), lo, hi, first, extent);
-    part.resize(static_cast<std::size_t>(extent.prod()) * nc);
-    MPI_Recv(part.data(), mpi_count(part.size(), "scatter_block"), MPI_DOUBLE, root, tag,
-             m_grid.comm(), MPI_STATUS_IGNORE);
-    set_part();
     return;
   }
-  // the root packs and sends the parts one by one through one buffer
+  // the root packs and sends the others' parts one by one through one
+  // buffer, and sets its own nodes straight from the values
   for (int r = 0; r < m_grid.size(); ++r) {
-    if (r == root)
-      continue;
     block_part(r, lo, hi, first, extent);
+    if (r == root) {
+      for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i& node) {
+        set_node_values(prop, node, values + at * nc);
+      });
+      continue;
+    }
     part.clear();
     for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
       part.insert(part.end(), values + at * nc, values + (at + 1) * nc);
@@ -341,12 +346,6 @@ void LBFluid::scatter_block(const std::string& prop, const Vec3i& lo, const Vec3
     MPI_Send(part.data(), mpi_count(part.size(), "scatter_block"), MPI_DOUBLE, r, tag,
              m_grid.comm());
   }
-  block_part(root, lo, hi, first, extent);
-  part.clear();
-  for_each_part_node(lo, n, first, extent, [&](std::size_t at, const Vec3i&) {
-    part.insert(part.end(), values + at * nc, values + (at + 1) * nc);
-  });
-  set_part();
 }
 
 int LBFluid::node_boundary(const Vec3i& node) const {
