@@ -616,16 +616,28 @@ def cell_overlaps_cell(sc):
     c.mesh._parts.remove()  # the warning is the check; take the cell away again
 
 
-@case("OifCell placed through a wall", oif.OverlapWarning, "constraint 0", "Wall", scene="cell")
-def cell_in_wall(sc):
-    wall = lbmd.constraints.ShapeBasedConstraint(shape=lbmd.shapes.Wall(normal=[1, 0, 0], dist=2.5),
-                                                 particle_type=5)
-    sc.system.constraints.add(wall)
+def cell_through(sc, walls, wall):
+    """Places a cell through `wall` added to `walls` (constraints or
+    lbboundaries), then takes both away again."""
+    walls.add(wall)
     try:
         c = oif.OifCell(cell_type=sc.cell_type, particle_type=1, origin=[1.5, 3.0, 3.0])
         c.mesh._parts.remove()
     finally:
-        sc.system.constraints.remove(wall)
+        walls.remove(wall)
+
+
+@case("OifCell placed through a wall", oif.OverlapWarning, "constraint 0", "Wall", scene="cell")
+def cell_in_wall(sc):
+    cell_through(sc, sc.system.constraints, lbmd.constraints.ShapeBasedConstraint(
+        shape=lbmd.shapes.Wall(normal=[1, 0, 0], dist=2.5), particle_type=5))
+
+
+@case("OifCell placed through a wall that is a lattice boundary only", oif.OverlapWarning, "lattice boundary 0",
+      "Wall", scene="fluid_cell")
+def cell_in_lattice_wall(sc):
+    cell_through(sc, sc.system.lbboundaries,
+                 lbmd.lbboundaries.LBBoundary(shape=lbmd.shapes.Wall(normal=[1, 0, 0], dist=2.5)))
 
 
 @case("two cell types of very different node density under one coupling gamma",
@@ -642,6 +654,86 @@ def cell_types_density_one_gamma(sc):
     s.thermostat.set_lb(LB_fluid=lbf, gamma=0.05)
     s.integrator.run(10)  # the check comes with the first run of 10 steps or more
     return cells
+
+
+def walled_channel(constraints=True, boundaries=True, coupled=True, contact=True, wall_type=5, cell_type=0):
+    """A channel between two walls at y 1 and 11 with a fluid and one cell;
+    the named parts left out or mixed up. Returns (system, kept objects)."""
+    s = lbmd.System(box_l=[16, 12, 12])
+    s.time_step = 0.1
+    lbf = fluid()
+    s.actors.add(lbf)
+    for w in (lbmd.shapes.Wall(normal=[0, 1, 0], dist=1), lbmd.shapes.Wall(normal=[0, -1, 0], dist=-11)):
+        if constraints:
+            s.constraints.add(shape=w, particle_type=wall_type)
+        if boundaries:
+            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=w))
+    ct = oif.OifCellType(*SPHERE, system=s, resize=(2.0,) * 3, ks=0.01, kb=0.01, kal=0.01, kag=0.1, kv=0.1,
+                         normal=True)
+    cell = oif.OifCell(cell_type=ct, particle_type=cell_type, origin=[8, 6, 6])
+    if contact and wall_type != cell_type:
+        oif.set_contacts(s, ct, particle_types=cell_type, wall_types=[wall_type])
+    if coupled:
+        s.thermostat.set_lb(LB_fluid=lbf, gamma=ct.suggest_LBgamma(visc=0.5, dens=1.0))
+    s.integrator.run(10)  # the check comes with the first run of 10 steps or more
+    return s, cell
+
+
+@case("cells in a fluid without thermostat.set_lb: the cells do not feel the fluid", SettingsWarning,
+      "coupled to the fluid", "no drag", "set_lb")
+def cells_not_coupled(sc):
+    return walled_channel(coupled=False)
+
+
+@case("walls added only as constraints, not as lattice boundaries: the fluid flows through them",
+      SettingsWarning, "constraint 0", "flows through this wall", "LBBoundary")
+def walls_only_constraints(sc):
+    return walled_channel(boundaries=False)
+
+
+@case("walls only as lattice boundaries, with cells: the cells feel no wall", SettingsWarning,
+      "lattice boundary 0", "pass into it", "constraints.add")
+def walls_only_lattice(sc):
+    return walled_channel(constraints=False)
+
+
+@case("a wall with no contact between its particle type and the cells'", SettingsWarning,
+      "constraint 0", "feel nothing from this wall", "set_contacts")
+def wall_without_contact(sc):
+    return walled_channel(contact=False)
+
+
+@case("a cell given the wall's particle type", SettingsWarning, "particle type 5", "same particle type")
+def cell_with_wall_type(sc):
+    return walled_channel(cell_type=5)
+
+
+@case("a driving force far too large: the fluid passes the advised Mach number mid-run", SettingsWarning,
+      "reached Mach", "lattice node", "after lattice update")
+def fluid_too_fast(sc):
+    s = lbmd.System(box_l=[8, 10, 4])
+    s.time_step = 0.1
+    lbf = fluid(ext_force_density=[0.5, 0, 0])  # Poiseuille peak speed 2.0: Mach 0.6
+    s.actors.add(lbf)
+    for w in (lbmd.shapes.Wall(normal=[0, 1, 0], dist=1), lbmd.shapes.Wall(normal=[0, -1, 0], dist=-9)):
+        s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=w))
+    s.integrator.run(100)  # the first check (Mach 0 at the start) is quiet: the watch tells
+    return s
+
+
+@case("System(box_l=[1e-4, 5e-5, 5e-5]): lengths in metres", ValueError, "box_l", "metres", "100 um")
+def system_box_metres(sc):
+    lbmd.System(box_l=[1e-4, 5e-5, 5e-5])
+
+
+@case("LBFluid(agrid=1e-6): the lattice spacing in metres", ValueError, "agrid", "metres")
+def fluid_agrid_metres(sc):
+    fluid(agrid=1e-6)
+
+
+@case("OifCellType(resize=(3.91e-6,) * 3): a cell's radius in metres", ValueError, "resize", "metres")
+def cell_type_radius_metres(sc):
+    oif.OifCellType(*oif.mesh_files("rbc374"), system=sc.system, resize=(3.91e-6,) * 3, ks=0.005)
 
 
 @case("seed_cells(..., haematocrit=1.5)", ValueError, "haematocrit", "(0, 1)", scene="cell")

@@ -107,6 +107,35 @@ class Decomposition(unittest.TestCase):
         for rank in "01":
             self.assertEqual(rows[rank], "spread True cells evaluated 11 22 0", lines)
 
+    SPEED_SCENE = """
+        import warnings
+        import lbmd.lb
+        s = lbmd.System(box_l=[8.0, 10.0, 4.0]); s.time_step = 0.1
+        if lbmd.size > 1:
+            s.cell_system.node_grid = [1, 2, 1]  # cut across the flow profile
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.0, tau=0.1, ext_force_density=[0.101, 0, 0])
+        s.actors.add(lbf)
+        for w in (lbmd.shapes.Wall(normal=[0, 1, 0], dist=1), lbmd.shapes.Wall(normal=[0, -1, 0], dist=-9)):
+            s.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=w))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            s.integrator.run(1500)
+        mach, node, update = s.__dict__["_mach_highest"]
+        say("seen", repr(mach), node, update, sum("reached Mach" in str(w.message) for w in caught))
+        """
+
+    def test_speed_watch_agrees(self):
+        """The speed watch's fastest node over two ranks (the fastest nodes
+        y 4.5 and 5.5 on either side of the cut) is the serial run's, bit for
+        bit, and rank 0 alone warns."""
+        serial = self.run_ranks(self.SPEED_SCENE, ranks=1)
+        lines = self.run_ranks(self.SPEED_SCENE, ranks=2)
+        rows = {line.split(" ", 1)[0]: line.split(" ", 1)[1] for line in lines if line[:1].isdigit()}
+        one = serial[0].split(" ", 1)[1]
+        self.assertTrue(one.startswith("seen 0.1") and one.endswith(" 1"), one)
+        self.assertEqual(rows["0"], one)
+        self.assertEqual(rows["1"], one[:-1] + "0")
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -40,6 +40,7 @@
 #include "lb/halo_plan.hpp"
 #include "lb/lb_lattice.hpp"
 #include "lb/population_storage.hpp"
+#include "lb/speed_watch.hpp"
 #include "shapes/shape.hpp"
 #include "system/box_geometry.hpp"
 #include "utils/vector.hpp"
@@ -161,6 +162,13 @@ public:
    *  non-positive or non-finite density or a speed >= the lattice sound speed;
    *  that update is abandoned half done, and every later call throws too. */
   void step();
+  /** The speed watch (speed_watch.hpp): a pass over the fluid nodes every
+   *  `every` updates (0: off) for the fastest node. */
+  int speed_watch_every() const { return m_speed_watch.every; }
+  void set_speed_watch_every(int every);
+  /** Collective: the fastest node any rank's watch saw since the last call
+   *  (the lowest rank's on a tie), then every rank's watch starts afresh. */
+  SpeedWatch take_speed_watch();
   /** Throws SimulationInstability (with the first failure's message) once an
    *  update has failed: System::integrate calls it before anything moves. */
   void check_usable() const;
@@ -186,9 +194,16 @@ public:
    *  fluid start at rest at `dens`. Throws InputError at once for a null
    *  shape, a non-finite velocity or too many boundaries. */
   void set_boundaries(const std::vector<BoundarySpec>& boundaries);
-  /** Replaces the open faces (collective; checked: both faces of an axis
-   *  open or neither, the plane sizes). */
+  /** Replaces the open faces (collective; checked: the plane sizes). A
+   *  face may be open alone on its axis where the opposite face is closed
+   *  by walls: open_seam_leaks() tells, once the lattice is flagged. */
   void set_open_boundaries(const std::vector<OpenBoundarySpec>& faces);
+  /** Collective, on a flagged lattice: per open face, 0 where the opposite
+   *  face is open too or closed; else how many fluid nodes of the opposite
+   *  face meet fluid nodes of this one across the periodic edge (the
+   *  lattice's streaming would carry the open face's rewritten populations
+   *  into them: a leak). */
+  std::vector<long> open_seam_leaks() const;
   const std::vector<OpenBoundarySpec>& open_boundaries() const { return m_open; }
   /** The flow-rate inlets' gains (a checkpoint keeps them). */
   std::vector<double> open_boundary_gains() const;
@@ -457,6 +472,8 @@ private:
   /** Throws SimulationInstability for the bad node; step() refuses to run
    *  after it (m_failed_update). */
   [[noreturn]] void report_instability(const BadNode& bad);
+  /** One pass of the speed watch (after an update). */
+  void watch_speed();
   inline void moments(std::size_t n, double& rho, Vec3& j) const;
   template <typename Real>
   inline void moments_of(const Real* populations, std::size_t n, double& rho, Vec3& j) const;
@@ -503,6 +520,7 @@ private:
   /// the message of the update that found a bad node (empty: none); that
   /// update was abandoned half done, so the fluid takes no more updates
   std::string m_failed_update;
+  SpeedWatch m_speed_watch;
   std::uint64_t m_layout_generation = 0;
   bool m_coupled = false; ///< see note_coupling
   int m_threads = 1;

@@ -142,6 +142,47 @@ template <typename Real> void LBFluid::step_stored_as(Real* f) {
     m_field_used = false;
   }
   ++m_updates;
+  if (m_speed_watch.every > 0 && m_updates % static_cast<std::uint64_t>(m_speed_watch.every) == 0)
+    watch_speed();
+}
+
+void LBFluid::watch_speed() {
+  const FastNode fast = m_pop.visit([this](const auto* f) {
+    return fastest_node(f, m_pop.read_offset(), m_geometry.runs, m_p.density, m_ext_lattice);
+  });
+  if (fast.u2 >= 0.0)
+    m_speed_watch.note(std::sqrt(3.0 * fast.u2),
+                       padded_coordinates(fast.node) - Vec3i::Ones() + m_origin, m_updates);
+}
+
+void LBFluid::set_speed_watch_every(int every) {
+  if (every < 0)
+    throw InputError("speed_watch_every must be >= 0 (0: off), got " + std::to_string(every));
+  m_speed_watch.every = every;
+}
+
+SpeedWatch LBFluid::take_speed_watch() {
+  SpeedWatch seen = m_speed_watch;
+  m_speed_watch = SpeedWatch{};
+  m_speed_watch.every = seen.every;
+  if (m_grid.size() > 1) {
+    // the fastest over the ranks (MAXLOC: the lowest rank on a tie), whose
+    // node and update every rank then learns
+    struct {
+      double mach;
+      int rank;
+    } mine{seen.seen ? seen.mach : -1.0, m_grid.rank()};
+    MPI_Allreduce(MPI_IN_PLACE, &mine, 1, MPI_DOUBLE_INT, MPI_MAXLOC, m_grid.comm());
+    long long where[4] = {seen.node[0], seen.node[1], seen.node[2],
+                          static_cast<long long>(seen.update)};
+    MPI_Bcast(where, 4, MPI_LONG_LONG, mine.rank, m_grid.comm());
+    seen.seen = mine.mach >= 0.0;
+    seen.mach = seen.seen ? mine.mach : 0.0;
+    seen.node =
+        Vec3i(static_cast<int>(where[0]), static_cast<int>(where[1]), static_cast<int>(where[2]));
+    seen.update = static_cast<std::uint64_t>(where[3]);
+  }
+  return seen;
 }
 
 // the halo (lb_halo.cpp) applies its periodic copies with the same runs

@@ -8,11 +8,14 @@
 // pressure outlet sets rho_b (p = c_s^2 rho) and takes u_b = u_n.
 //
 // The lattice is periodic, so the two faces of an open axis are neighbours
-// across the periodic edge: both must be open, and both face planes are
+// across the periodic edge: either both are open, and both face planes are
 // rewritten after every update (after the halo and the bounce-back), which
 // cuts the periodic coupling: what the inlet plane streams inward comes from
-// the boundary values alone. The planes are read and written through
-// population_slot, so the in-place update's layout does not matter.
+// the boundary values alone; or the opposite face is closed by walls where
+// it meets the open one (open_seam_leaks checks it), so what the open face
+// streams across the edge is bounced back into it and rewritten. The planes
+// are read and written through population_slot, so the in-place update's
+// layout does not matter.
 #include "lb/lb_fluid.hpp"
 #include "utils/errors.hpp"
 
@@ -56,7 +59,6 @@ void LBFluid::for_each_open_node(const OpenBoundarySpec& face, Body&& body) cons
 }
 
 void LBFluid::set_open_boundaries(const std::vector<OpenBoundarySpec>& faces) {
-  std::array<int, 3> open_faces{0, 0, 0};
   for (const auto& f : faces) {
     require(f.axis >= 0 && f.axis < 3, "open boundary: axis must be 0, 1 or 2");
     const auto [a, b] = plane_axes(f.axis);
@@ -72,7 +74,6 @@ void LBFluid::set_open_boundaries(const std::vector<OpenBoundarySpec>& faces) {
       for (const double v : f.velocity)
         require(std::isfinite(v), "velocity inlet: the velocities must be finite");
     }
-    open_faces[f.axis] |= f.high ? 2 : 1;
     require(m_global[f.axis] >= 4, "open boundary: the lattice needs at least 4 nodes along the "
                                    "open axis");
     // the face and its inward neighbour on one rank
@@ -80,14 +81,44 @@ void LBFluid::set_open_boundaries(const std::vector<OpenBoundarySpec>& faces) {
             "open boundary: a subdomain is a single node thick along the open axis; use fewer "
             "ranks along it (cell_system.node_grid)");
   }
-  for (int d = 0; d < 3; ++d)
-    require(open_faces[d] == 0 || open_faces[d] == 3,
-            "open boundary: the lattice is periodic, so an axis with an open face needs both its "
-            "faces open (an inlet and an outlet); axis " +
-                std::to_string(d) + " has only its " + (open_faces[d] == 1 ? "low" : "high") +
-                " face");
   m_open = faces;
   ++m_state_version;
+}
+
+std::vector<long> LBFluid::open_seam_leaks() const {
+  require_flagged("the open faces' check");
+  std::vector<long> leaks(m_open.size(), 0);
+  for (std::size_t i = 0; i < m_open.size(); ++i) {
+    const OpenBoundarySpec& face = m_open[i];
+    bool opposite_open = false;
+    for (const auto& other : m_open)
+      opposite_open |= other.axis == face.axis && other.high != face.high;
+    if (opposite_open)
+      continue;
+    // the closed face: the plane at the other end of the axis; its fluid
+    // nodes must not meet a fluid node of the open face across the periodic
+    // edge (the ghost layer holds the open face's flags there), diagonal
+    // neighbours included
+    const auto [a, b] = plane_axes(face.axis);
+    const std::ptrdiff_t across = (face.high ? -1 : 1) * padded_axis_stride(face.axis);
+    OpenBoundarySpec closed; // the opposite plane, walked as a face
+    closed.axis = face.axis;
+    closed.high = !face.high;
+    for_each_open_node(closed, [&](std::size_t n, const Vec3i&, std::size_t) {
+      bool meets = false;
+      for (int da = -1; da <= 1; ++da)
+        for (int db = -1; db <= 1; ++db) {
+          const std::ptrdiff_t m = static_cast<std::ptrdiff_t>(n) + across +
+                                   da * padded_axis_stride(a) + db * padded_axis_stride(b);
+          meets |= m_flag[static_cast<std::size_t>(m)] == 0;
+        }
+      leaks[i] += meets;
+    });
+  }
+  if (m_grid.size() > 1 && !leaks.empty())
+    MPI_Allreduce(MPI_IN_PLACE, leaks.data(), static_cast<int>(leaks.size()), MPI_LONG, MPI_SUM,
+                  m_grid.comm());
+  return leaks;
 }
 
 void LBFluid::apply_open_boundaries() {

@@ -21,7 +21,7 @@ import lbmd
 from lbmd import cell_registry
 from lbmd.file_output import replace_atomically
 from lbmd.particle_data import ParticleHandle
-from lbmd.validation import INT32_MAX as _INT32_MAX, is_whole_number as _is_int, real_number as _real_number, vector3 as _vector3
+from lbmd.validation import check_not_metres as _check_not_metres, INT32_MAX as _INT32_MAX, is_whole_number as _is_int, real_number as _real_number, vector3 as _vector3
 
 from . import geometry as geo
 from . import mesh_io
@@ -135,9 +135,10 @@ def _winding(points, nodes, triangles):
 def _warn_overlaps(owner, system, pos, triangles, cell_id):
     """Warn (OverlapWarning) when nodes of a new cell lie inside an existing
     cell or that cell's nodes inside the new one, or the new cell's nodes
-    inside a non-penetrable constraint's shape. Cheap: bounding boxes first,
+    inside a non-penetrable constraint's shape or a lattice boundary's. Cheap: bounding boxes first,
     then a winding number only for the nodes in the other cell's box;
-    periodic images are not looked at."""
+    periodic images are not looked at. Lattice boundaries count as walls
+    too."""
     import warnings
     from .seeding import _signed_distances  # (seeding imports this module)
     lo, hi = pos.min(axis=0), pos.max(axis=0)
@@ -159,6 +160,16 @@ def _warn_overlaps(owner, system, pos, triangles, cell_id):
         n_in = int(np.count_nonzero(_signed_distances(shape)(pos) <= 0.0))  # is_inside, all at once
         if n_in:
             hits.append(f"constraint {k} ({type(shape).__name__}, {n_in} of its nodes inside)")
+    # the fluid's walls too (a wall may be a lattice boundary only); a shape
+    # that is also a constraint's is named once
+    constraint_shapes = [getattr(con, "shape", None) for con in system.constraints]
+    for k, boundary in enumerate(getattr(system, "lbboundaries", ())):
+        shape = boundary.shape
+        if any(shape is other for other in constraint_shapes):
+            continue
+        n_in = int(np.count_nonzero(_signed_distances(shape)(pos) <= 0.0))
+        if n_in:
+            hits.append(f"lattice boundary {k} ({type(shape).__name__}, {n_in} of its nodes inside)")
     if hits:
         warnings.warn(f"{owner}: the new cell (cell_id {cell_id}) overlaps " + ", ".join(hits)
                       + "; place it elsewhere (oif.seed_cells places cells without overlaps)",
@@ -759,6 +770,10 @@ class OifCellType:
         self.resize = tuple(float(x) for x in _vec3(owner, "resize", resize, positive=True))
         self.mesh = Mesh(nodes_file=nodes_file, triangles_file=triangles_file, system=system,
                          resize=self.resize, normal=bool(normal), check_orientation=bool(check_orientation))
+        # a cell a few micrometres wide given in metres (resize=(3.9e-6, ...))
+        # would fail only in the run, as an inverted triangle
+        _check_not_metres(f"{owner}: the cell (mesh times parameter 'resize')",
+                          float(np.ptp(np.asarray(self.mesh._nodes, dtype=float), axis=0).max()))
         for k, v in moduli.items():
             setattr(self, k, v)
         self.normal = bool(normal)

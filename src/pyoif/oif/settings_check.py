@@ -53,14 +53,15 @@ def cell_settings(system, cells, fluid, gamma, langevin, report):
                 f"{label}: radius / agrid", f"{r_nodes:.3g} nodes", "advised >= 4",
                 f"drag of a sphere of that many nodes {drag} (charted)",
                 "a coarser lattice (larger agrid) would resolve the cells as well"
-                if r_nodes > 12 else "", ok=r_nodes >= 2.0))
+                if r_nodes > 12 else "", ok=r_nodes >= 2.0, advised=r_nodes >= 4.0))
             ratio = edge / fluid.agrid
             lo, hi = EDGE_PER_AGRID
             report.append(Setting(
                 f"{label}: mean edge / agrid", f"{ratio:.3g}", f"advised {lo}..{hi}",
                 "fluid passes between the membrane's nodes" if ratio > hi else
                 "the membrane and the lattice resolve each other",
-                "a coarser mesh would do for the coupling" if ratio < lo else "", ok=ratio <= hi))
+                "a coarser mesh would do for the coupling" if ratio < lo else "", ok=ratio <= hi,
+                advised=ratio >= lo))
         # mesh resolution against the measured shape error
         err = float(np.interp(nodes, [p[0] for p in MESH_ERROR], [p[1] for p in MESH_ERROR]))
         report.append(Setting(
@@ -113,8 +114,19 @@ def cell_settings(system, cells, fluid, gamma, langevin, report):
             "the denser cell type feels that much more friction per area from the fluid: "
             "use meshes of similar node density (the coupling has one gamma for all particles)",
             ok=ratio < NODE_DENSITY_RATIO_MAX))
-    # contacts between the cells' particle types
     cell_types = sorted({int(t) for c in cells for t in np.unique(c.particles.type)})
+    # a fluid the cells do not feel (no thermostat.set_lb): they stay where
+    # they are while it flows
+    if fluid is not None:
+        report.append(Setting(
+            "cells coupled to the fluid", f"gamma {gamma:g}" if gamma else "no (thermostat.set_lb not called)",
+            "system.thermostat.set_lb(LB_fluid=..., gamma=...)",
+            "the cells move with the fluid and push it back" if gamma else
+            "the cells feel no drag and stay where they are while the fluid flows past (and through) "
+            "them: call system.thermostat.set_lb(LB_fluid=lbf, gamma=cell_type.suggest_LBgamma(...))",
+            ok=bool(gamma)))
+    _wall_contacts(system, cell_types, report)
+    # contacts between the cells' particle types
     if len(cells) > 1:
         for i, a in enumerate(cell_types):
             for b in cell_types[i:]:
@@ -150,6 +162,38 @@ def cell_settings(system, cells, fluid, gamma, langevin, report):
                         f"contact between cell types {a} and {b}", "none", "a pair contact",
                         "the cells pass through each other unseen (no crossing check without a "
                         "contact): add the advised hard_contact (oif.set_contacts)", ok=False))
+
+
+def _wall_contacts(system, cell_types, report):
+    """Each wall (constraint) against each particle type of the cells: the
+    type must not be the wall's own (the wall's contact would act between
+    the cell's nodes too, and the cell-cell contact on the wall) and must
+    have a contact with it (without one the nodes enter the wall unseen)."""
+    from lbmd.interactions import NONBONDED_MODELS
+    for i, c in enumerate(system.constraints):
+        if not hasattr(c, "shape"):
+            continue
+        wall_type = int(c.particle_type)
+        shape = type(c.shape).__name__
+        for t in cell_types:
+            label = f"cells of particle type {t} against constraint {i} ({shape}, particle type {wall_type})"
+            if t == wall_type:
+                report.append(Setting(
+                    label, "the same particle type", "a particle type of its own for each wall",
+                    "the wall's contact acts between the cells' own nodes too, and the cells' contact "
+                    "on the wall: give the constraint another particle_type and set the contact "
+                    "between the two (oif.set_contacts(..., wall_types=...))", ok=False))
+                continue
+            pair = system.non_bonded_inter[t, wall_type]
+            active = [name for name, cls in NONBONDED_MODELS.items() if getattr(pair, name).is_active()]
+            report.append(Setting(
+                label, ", ".join(active) if active else "no contact",
+                "a contact between the cells' and the wall's particle types",
+                "the wall pushes the cells' nodes back" if active else
+                "the cells feel nothing from this wall: their nodes enter it unseen (the run stops "
+                "when one is inside), or pass it where it is penetrable; add the advised contact: "
+                f"oif.set_contacts(system, cell_types, particle_types=..., wall_types=[{wall_type}])",
+                ok=bool(active)))
 
 
 _TRIALS = {}

@@ -178,6 +178,20 @@ void bind_lb(py::module_& m) {
             }
           },
           py::arg("n") = 1)
+      .def_property("speed_watch_every", &LBFluid::speed_watch_every,
+                    &LBFluid::set_speed_watch_every,
+                    "lattice updates between two passes of the speed watch (0: off)")
+      .def(
+          "take_speed_watch",
+          [](LBFluid& f) {
+            // collective: every rank of the fluid calls it
+            const lb::SpeedWatch w = f.take_speed_watch();
+            if (!w.seen)
+              return py::object(py::none());
+            return py::object(py::make_tuple(w.mach, w.node, w.update));
+          },
+          "(Mach, global node, update) of the fastest node the watch saw since the last "
+          "call, or None; collective")
       .def("total_mass", [](LBFluid& f) { return f.total_mass(); })
       .def("total_momentum", [](LBFluid& f) { return f.total_momentum(); })
       .def("set_boundaries",
@@ -198,6 +212,9 @@ void bind_lb(py::module_& m) {
                specs.push_back({axis, high, pressure, velocity, density, flow_rate, 1.0});
              f.set_open_boundaries(specs);
            })
+      .def("open_seam_leaks", &LBFluid::open_seam_leaks,
+           "per open face, fluid nodes of the closed opposite face that meet it across the "
+           "periodic edge (0: none); collective")
       .def("open_boundary_gains", &LBFluid::open_boundary_gains)
       .def("set_open_boundary_gains", &LBFluid::set_open_boundary_gains)
       .def("open_boundary_mass_flux",

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _lbmd
 from .old_names import warn_old_name
-from .validation import Param, ParameterObject, non_negative, positive
+from .validation import Param, ParameterObject, check_not_metres, non_negative, positive
 
 _COLLISIONS = ("MRT", "MRT_ESPRESSO", "TRT", "BGK")
 
@@ -56,9 +56,13 @@ class LBFluid(ParameterObject):
                _threads_param(),
                Param("single_precision", "bool", False,
                      doc="store the populations as float deviations from the rest state at "
-                         "dens and collide them in float (half the memory traffic)")]
+                         "dens and collide them in float (half the memory traffic)"),
+               Param("speed_watch_every", "int", 100, check=non_negative,
+                     doc="lattice updates between two looks for the fastest node during a run "
+                         "(a warning past the advised Mach number; 0: off)")]
 
     def _validate(self):
+        check_not_metres("LBFluid: parameter 'agrid'", self.agrid)
         if self.kT > 0 and self.seed is None:
             raise ValueError("LBFluid: parameter 'seed' is required when kT > 0")
         v = self.__dict__["_values"]
@@ -94,6 +98,8 @@ class LBFluid(ParameterObject):
                              node_grid=system.cell_system._node_grid or [0, 0, 0],
                              balance=system.cell_system.balance == "fluid",
                              single_precision=self.single_precision)
+        # (a checkpoint of an older version has no speed_watch_every)
+        core.speed_watch_every = self.__dict__["_values"].get("speed_watch_every", 100)
         system.lbboundaries._apply(core)
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)

@@ -51,23 +51,28 @@ import numpy as np
 TAU_STABLE_MIN = {"MRT": 0.513, "TRT": 0.513, "BGK": 0.507, "MRT_ESPRESSO": 0.5005}
 TAU_ADVISED = (0.55, 3.0)
 MACH_ADVISED, MACH_LIMIT = 0.1, 0.2
+#: the Mach numbers past which the speed watch warns (once each)
+MACH_WARN_LEVELS = (MACH_ADVISED, MACH_LIMIT, 0.4, 0.8)
 #: Poiseuille compressibility error of MRT against Mach (measured)
 MACH_ERROR = ((0.03, 7.5e-7), (0.043, 1.2e-5), (0.17, 3e-3))
 
 
 class Setting:
     """One choice: its name, value, the limit it is held against, the error
-    to expect, whether a cheaper setting would do, and ok (False: warned)."""
+    to expect, whether a cheaper setting would do, ok (False: past the
+    measured limit, warned) and advised (False: within the measured limit
+    but past the advice, printed as a note, never as "ok")."""
 
-    def __init__(self, name, value, limit, expected, cheaper="", ok=True):
+    def __init__(self, name, value, limit, expected, cheaper="", ok=True, advised=True):
         self.name, self.value, self.limit = name, value, limit
         self.expected, self.cheaper, self.ok = expected, cheaper, ok
+        self.advised = bool(ok and advised)
 
     def __repr__(self):
-        return (f"Setting({self.name!r}, value={self.value!r}, ok={self.ok})")
+        return (f"Setting({self.name!r}, value={self.value!r}, ok={self.ok}, advised={self.advised})")
 
     def line(self):
-        flag = "ok  " if self.ok else "WARN"
+        flag = "WARN" if not self.ok else "ok  " if self.advised else "note"
         text = f"[{flag}] {self.name}: {self.value}; limit {self.limit}; expect {self.expected}"
         if self.cheaper:
             text += f"; cheaper: {self.cheaper}"
@@ -79,6 +84,10 @@ class SettingsReport(list):
 
     def warnings(self):
         return [s for s in self if not s.ok]
+
+    def notes(self):
+        """Settings within the measured limits but past the advice."""
+        return [s for s in self if s.ok and not s.advised]
 
     def __str__(self):
         if not self:
@@ -112,7 +121,7 @@ def _fluid_settings(system, fluid, report):
             "relaxation time tau*", f"{tau_star:.4g} ({collision})", f"advised {lo}..{hi}",
             "the drag of obstacles drifts with tau* (MRT about 1 %, MRT_ESPRESSO -9..-25 %, "
             "BGK -24..-58 % at 3.5); a longer tau or smaller agrid brings it back",
-            ok=collision in ("MRT", "TRT")))
+            ok=collision in ("MRT", "TRT"), advised=False))
     else:
         report.append(Setting("relaxation time tau*", f"{tau_star:.4g} ({collision})",
                               f"advised {lo}..{hi}", "stable; wall and drag as charted"))
@@ -120,16 +129,19 @@ def _fluid_settings(system, fluid, report):
     speed = float(np.linalg.norm(fluid[:, :, :].velocity, axis=-1).max())
     c_s = fluid.agrid / fluid.tau / math.sqrt(3.0)
     mach = float(speed / c_s)
-    if mach == 0:
-        expected = "fluid at rest now: check again once it flows"
-    elif mach < MACH_ERROR[0][0]:
-        expected = f"Poiseuille compressibility error below {MACH_ERROR[0][1]:.1g} of the peak speed"
-    else:
-        expected = (f"Poiseuille compressibility error about {_interpolate_log(MACH_ERROR, mach):.1g}"
-                    f" of the peak speed")
+    expected = "fluid at rest now: check again once it flows" if mach == 0 else _mach_error(mach)
     report.append(Setting("Mach number (fastest node now)", f"{mach:.3g}",
                           f"advised <= {MACH_ADVISED}, at most {MACH_LIMIT}", expected,
-                          ok=mach <= MACH_LIMIT))
+                          ok=mach <= MACH_ADVISED))
+    highest = system.__dict__.get("_mach_highest")
+    if highest is not None:
+        # what the speed watch saw during the runs so far (every
+        # fluid.speed_watch_every updates)
+        m, node, update = highest
+        report.append(Setting("Mach number (fastest node seen during the runs)", f"{m:.3g}",
+                              f"advised <= {MACH_ADVISED}, at most {MACH_LIMIT}",
+                              f"{_mach_error(m)} (node {node}, after lattice update {update})",
+                              ok=m <= MACH_ADVISED))
     single = bool(getattr(fluid, "single_precision", False))
     report.append(Setting("precision", "single" if single else "double", "",
                           "round-off about 1e-6 of the speeds (float deviations from rest)" if single
@@ -137,6 +149,107 @@ def _fluid_settings(system, fluid, report):
                           "" if single else "single_precision=True updates the lattice 2.3x as "
                           "fast (128^3, one core) with errors of 1e-6 to 1e-5 of the speeds "
                           "(Poiseuille, Couette, coupling: doc/lb.md)"))
+
+
+#: share of a constraint's lattice nodes that are fluid (or of a lattice
+#: boundary's nodes outside every constraint) from which the two are
+#: reported as not the same wall; the surface's own nodes can go either way
+WALL_MISMATCH_SHARE = 0.5
+#: lattice nodes the wall comparison samples at most (a regular subset)
+WALL_SAMPLE_NODES = 400_000
+
+
+def _walls_settings(system, fluid, report):
+    """Constraints (what particles feel) against lattice boundaries (what
+    the fluid feels), compared on the lattice nodes: a constraint whose
+    inside is mostly fluid lets the fluid flow through a wall the cells
+    cannot pass; a lattice boundary outside every constraint stops the fluid
+    but lets particles in. Collective (the boundary flags of every rank)."""
+    constraints = [c for c in system.constraints if hasattr(c, "shape")]
+    boundaries = list(system.lbboundaries)
+    if not constraints and not boundaries:
+        return
+    flags = np.asarray(fluid[:, :, :].boundary)
+    step = max(1, int(math.ceil((flags.size / WALL_SAMPLE_NODES) ** (1.0 / 3.0))))
+    flags = flags[::step, ::step, ::step]
+    idx = np.indices(flags.shape).reshape(3, -1).T * step
+    points = (idx + 0.5) * fluid.agrid
+    flags = flags.reshape(-1)
+    covered = np.zeros(len(points), dtype=bool)
+    for i, c in enumerate(constraints):
+        inside = c.shape.signed_distances(points) < 0.0
+        if not c.penetrable:
+            covered |= inside
+        n_inside = int(inside.sum())
+        if n_inside == 0 or c.penetrable:
+            continue
+        fluid_share = float(np.count_nonzero(flags[inside] == 0)) / n_inside
+        name = f"constraint {i} ({type(c.shape).__name__}) against the lattice boundaries"
+        if fluid_share > WALL_MISMATCH_SHARE:
+            report.append(Setting(
+                name, f"{100 * fluid_share:.0f} % of the lattice nodes inside it are fluid",
+                "a wall is both a constraint (for the particles) and a lattice boundary (for the fluid)",
+                "the fluid flows through this wall while the cells cannot pass it (a fluid "
+                "between walls only as constraints accelerates without limit): add "
+                "system.lbboundaries.add(lbmd.lbboundaries.LBBoundary(shape=<the same shape>))",
+                ok=False))
+        else:
+            report.append(Setting(name, "a lattice boundary too", "", "the fluid and the particles see one wall"))
+    if not len(system.part):
+        return  # a boundary no particle can reach is the fluid's own business
+    for i, b in enumerate(boundaries):
+        mine = flags == i + 1
+        n_mine = int(mine.sum())
+        if n_mine == 0:
+            continue
+        outside = float(np.count_nonzero(~covered[mine])) / n_mine
+        if outside > WALL_MISMATCH_SHARE:
+            report.append(Setting(
+                f"lattice boundary {i} ({type(b.shape).__name__}) against the constraints",
+                f"{100 * outside:.0f} % of its nodes are inside no constraint",
+                "a wall is both a lattice boundary (for the fluid) and a constraint (for the particles)",
+                "the fluid stops at this wall but the particles (cells) feel nothing and pass into it: "
+                "add system.constraints.add(shape=<the same shape>, particle_type=<a wall type>) and a "
+                "contact between the cells' and the wall's types (oif.set_contacts(..., wall_types=...))",
+                ok=False))
+
+
+def _mach_error(mach):
+    if mach < MACH_ERROR[0][0]:
+        return f"Poiseuille compressibility error below {MACH_ERROR[0][1]:.1g} of the peak speed"
+    if mach > MACH_ERROR[-1][0]:
+        return (f"Poiseuille compressibility error above {MACH_ERROR[-1][1]:.1g} of the peak speed "
+                f"(measured at Mach {MACH_ERROR[-1][0]}; faster not charted)")
+    return f"Poiseuille compressibility error about {_interpolate_log(MACH_ERROR, mach):.1g} of the peak speed"
+
+
+def watch_fluid_speed(system, fluid):
+    """After a run (collective): the fastest node the fluid's speed watch saw
+    in it (a pass every ``fluid.speed_watch_every`` updates); a SettingsWarning
+    (rank 0) naming the node, the update and the time when it is past the
+    advised Mach number, once for each of MACH_WARN_LEVELS it passes. The
+    highest seen is kept for check_settings."""
+    seen = fluid._core.take_speed_watch()
+    if seen is None:
+        return
+    mach, node, update = seen
+    d = system.__dict__
+    if mach > d.get("_mach_highest", (0.0,))[0]:
+        d["_mach_highest"] = (mach, tuple(int(n) for n in node), int(update))
+    # one warning per level passed: the advice, the limit, then each doubling
+    level = sum(mach > m for m in MACH_WARN_LEVELS)
+    if level <= d.get("_mach_warned", 0):
+        return
+    d["_mach_warned"] = level
+    from . import rank
+    if rank == 0:
+        where = ", ".join(f"{(n + 0.5) * fluid.agrid:g}" for n in node)
+        warnings.warn(
+            f"check_settings: the fluid reached Mach {mach:.3g} (advised <= {MACH_ADVISED}, at most "
+            f"{MACH_LIMIT}) at lattice node ({', '.join(str(int(n)) for n in node)}), position ({where}), "
+            f"after lattice update {update} (time {update * fluid.tau:g}): {_mach_error(mach)}; "
+            f"lower the driving force, pressure drop or inlet speed, or make the lattice's sound speed "
+            f"larger against the flow (a shorter tau at the same viscosity)", SettingsWarning, stacklevel=3)
 
 
 def check_settings(system, warn=False):
@@ -156,6 +269,7 @@ def check_settings(system, warn=False):
     report = SettingsReport()
     if fluid is not None:
         _fluid_settings(system, fluid, report)
+        _walls_settings(system, fluid, report)
     # the cells' lines come from the cell model that made them (oif), through
     # the registry: lbmd does not know the cell model (lbmd.cell_registry)
     from .cell_registry import settings_checks

@@ -7,7 +7,7 @@ from . import _lbmd
 from .constraints import Constraints
 from .interactions import BondedInteractions, NonBondedInteractions
 from .particle_data import ParticleList
-from .validation import Param, parse, positive, non_negative
+from .validation import Param, check_not_metres, parse, positive, non_negative
 
 
 #: runs shorter than this do not trigger the settings check of the first run
@@ -149,6 +149,9 @@ class Integrator:
                                                    _interruptible())
         finally:
             self._system._warn_drifted_cells()
+        if fluid is not None:
+            from .settings_check import watch_fluid_speed
+            watch_fluid_speed(self._system, fluid)
         if stopped:  # a walltime signal (lbmd.checkpoint.stop_on_signal): save and exit
             from . import checkpoint
             checkpoint._after_stop()
@@ -468,6 +471,7 @@ class System:
                              Param("min_global_cut", "float", 0.0, check=non_negative)], kwargs)
         if not np.all(v["box_l"] > 0):
             raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {kwargs['box_l']!r}")
+        check_not_metres("System: parameter 'box_l'", float(np.max(v["box_l"])))
         d = self.__dict__
         d["_core"] = _lbmd.System(v["box_l"], v["periodicity"])
         d["_time_step_set"] = False
@@ -515,6 +519,7 @@ class System:
             v = parse("System", [Param("box_l", "vec3")], {"box_l": value})["box_l"]
             if not np.all(v > 0):
                 raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {value!r}")
+            check_not_metres("System: parameter 'box_l'", float(np.max(v)))
             self._check_box_change(v)
             self._core.box_l = v
         elif name == "periodicity":

@@ -170,6 +170,24 @@ def integers(owner, name, value, lo=0, hi=INT32_MAX):
 
 
 # Range checks: (predicate, description)
+#: no length of a scene in micrometres (the unit of length of the samples
+#: and of lbmd.units' default) is below this: a smaller one was given in
+#: metres. A script in another unit of length (metres) sets it to 0.
+SMALLEST_LENGTH = 1e-3
+
+
+def check_not_metres(where, length):
+    """ValueError naming the unit mistake when a length (a number, > 0) is
+    below SMALLEST_LENGTH: `where` names the parameter, e.g. "System:
+    parameter 'box_l'"."""
+    if 0 < length < SMALLEST_LENGTH:
+        raise ValueError(
+            f"{where} is {length:g} long: a length in metres? Lengths are in the script's unit of "
+            f"length, micrometres in the samples (lbmd.units converts SI values): {length:g} m is "
+            f"{length * 1e6:g} um (a script whose unit of length is the metre sets "
+            f"lbmd.validation.SMALLEST_LENGTH = 0)")
+
+
 positive = (lambda x: x > 0, "> 0")
 non_negative = (lambda x: x >= 0, ">= 0")
 greater_than_one = (lambda x: x > 1, "> 1")
