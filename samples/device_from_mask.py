@@ -1,35 +1,52 @@
 #!/usr/bin/env pyoif
-"""Red blood cells through a microfluidic constriction drawn as a 2D layout:
-the device from a CAD file, an inlet and an outlet, cells entering at a set
-haematocrit and leaving at the outlet.
+"""Red blood cells through a microfluidic device drawn as a 2D layout: the
+device from a CAD file, an inlet and as many outlets as the layout has,
+cells entering at a set haematocrit and leaving by every outlet.
 
     pyoif samples/device_from_mask.py [--layout samples/data/constriction.dxf]
-          [--scale UM] [--height UM] [--speed MM_S] [--haematocrit H] [--duration MS]
-          [--output-every US] [--seed S] [--output DIR] [--vtk] [--no-plots]
+          [--scale UM] [--height UM] [--inlet x-] [--outlets x+ [y+ ...]] [--speed MM_S] [--haematocrit H]
+          [--duration MS] [--output-every US] [--seed S] [--output DIR] [--no-vtk] [--no-plots]
 
-The device: samples/data/constriction.dxf (or .svg, or a black/white PNG
-mask with --pixel-size) -- a channel 60 x 20 drawing units whose walls bulge
-in to a throat 6 units wide -- scaled by --scale um per unit (default 1.5:
-a channel 90 x 30 um, throat 9 um) and extruded to --height um (default 12)
-with lbmd.shapes.Extrusion (direction -1: the drawn region is the channel;
-the shape is both the fluid's boundary and the cells' wall). The flow:
-plasma (1000 kg/m^3, 1.5 mPa s) enters through a Poiseuille velocity inlet
-on the x- face at a mean speed --speed (mm/s, default 30) and leaves
-through a pressure outlet on the x+ face (lbmd.open_boundaries). The cells:
-red blood cells (rbc374, radius 3.91 um) enter in the first 15 um of the
-channel (oif.CellFlow: random positions and orientations, seeded, never
-overlapping) while the haematocrit there is below --haematocrit (default
-0.1), and are removed 5 um before the outlet. As in the flagship sample the
+The device: a layout -- samples/data/constriction.dxf (default; or .svg, or
+a black/white PNG mask with --pixel-size), a channel 60 x 20 drawing units
+whose walls bulge in to a throat 6 units wide; samples/data/t_junction.svg, a
+T-junction with a side branch to the top; samples/data/bifurcation.svg, an
+inlet channel splitting into two branches of widths 10 and 8 -- scaled by
+--scale um per unit (default 1.5: the constriction 90 x 30 um, throat 9 um)
+and extruded to --height um (default 12) with lbmd.shapes.Extrusion
+(direction -1: the drawn region is the channel; the shape is both the
+fluid's boundary and the cells' wall).
+
+The ports: the box is the layout's extent, with one lattice spacing of
+wall beyond the drawing on every side that is not named a port (so that the
+channel's walls there are solid nodes). On the --inlet face (default x-)
+and each of the --outlets faces (default x+; the T-junction: x+ y+) the
+drawn channel must reach the box's side; each run of fluid nodes it has
+there (read from the lattice's boundary flags) is a port. Plasma (1000
+kg/m^3, 1.5 mPa s) enters the inlet ports through a Poiseuille velocity
+inlet at a mean speed --speed (mm/s, default 30) and leaves through pressure
+outlets at the plasma's density on the outlet faces (lbmd.open_boundaries;
+a face whose opposite face is closed by wall may be open alone, as the
+T-junction's y+). The cells: red blood cells (rbc374, radius 3.91
+um) enter in the first 3..18 um of each inlet run (oif.CellFlow: random
+positions and orientations, seeded, never overlapping) while the
+haematocrit there is below --haematocrit (default 0.1), and are removed
+within 5 um of any outlet run (one CellFlow outlet region per run: two
+branches ending on one face are two outlets). As in the flagship sample the
 membranes are stiffer in proportion to the speed (the capillary numbers of
 the paper's RBCs at 1.3 mm/s; at most 27 x their moduli), with a light
 node mass and a small membrane viscosity. (At most 27x, the flagship's --small:
 40x and 60x broke here within 1 ms at 45 and 60 mm/s.)
 
+Printed at the end: the mass flux out of the device over the mass flux in,
+and per outlet its share of the flow and the cells that left by it.
 Outputs in DIR (default output_device): cells.csv (per output, every cell
 in the device: centre, velocity, volume, surface, the longest extent),
-events.csv (each cell's entry and exit, time and position), scene.json,
-device_trajectories.png (the cells' paths over the layout) and with --vtk
-walls.vtp, cells.pvd, fluid.pvd (mid-height plane) for ParaView.
+events.csv (each cell's entry and exit, time, position and, for an exit,
+the outlet), scene.json, scene_start.png and scene_end.png (the device and
+its cells seen from above), device_trajectories.png (the cells' paths over
+the layout; --no-plots skips the pictures) and walls.vtp, cells.pvd,
+fluid.pvd (mid-height plane) for ParaView (--no-vtk skips them).
 """
 import argparse
 import csv
@@ -47,6 +64,7 @@ from lbmd.shapes import Extrusion
 from lbmd.units import UnitSystem, oif_moduli_from_si
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+FACES = ("x-", "x+", "y-", "y+")  # the box's sides in the layout's plane
 UNITS = UnitSystem()  # um, us, 1e-15 kg
 PLASMA_DENSITY, PLASMA_VISCOSITY = 1000.0, 1.5e-3      # kg/m^3, Pa s
 RBC_RADIUS = 3.91e-6                                   # m
@@ -70,58 +88,123 @@ def parse_arguments(argv=None):
     ap.add_argument("--haematocrit", type=float, default=0.1, help="haematocrit kept in the inlet region")
     ap.add_argument("--duration", type=float, default=3.0, help="simulated time in ms")
     ap.add_argument("--output-every", type=float, default=20.0, help="output interval in us")
+    ap.add_argument("--inlet", choices=FACES, default="x-",
+                    help="the face of the velocity inlet (the layout's channel must reach it)")
+    ap.add_argument("--outlets", choices=FACES, nargs="+", default=["x+"],
+                    help="the faces of the pressure outlets (the layout's channel must reach each)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--output", default="output_device")
-    ap.add_argument("--vtk", action="store_true")
+    vtk = ap.add_mutually_exclusive_group()
+    vtk.add_argument("--vtk", action="store_true", help="ParaView's files (the default)")
+    vtk.add_argument("--no-vtk", action="store_true", help="write no ParaView files")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
     for name in ("scale", "height", "speed", "duration", "output_every"):
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0):
             ap.error(f"--{name.replace('_', '-')} must be a positive number, got {value}")
+    if args.inlet in args.outlets or len(set(args.outlets)) != len(args.outlets):
+        ap.error(f"--inlet {args.inlet} and --outlets {' '.join(args.outlets)} must be different faces")
     if not 0 < args.haematocrit <= 0.4:
         ap.error(f"--haematocrit must be in (0, 0.4], got {args.haematocrit}")
     return args
 
 
 args = parse_arguments()
+args.vtk = not args.no_vtk  # ParaView's files by default (a few MB)
 rank0 = lbmd.rank == 0
 say = print if rank0 else (lambda *a, **k: None)
 
-# --- the device: the layout, scaled and extruded (um = lattice units)
+# --- the device: the layout, scaled and extruded (um = lattice units). The
+# box is the layout's extent; a side that is no port gets one more lattice
+# spacing of wall beyond the drawing, so that the channel's walls there are
+# solid nodes, not the box's periodic edge; a port's side ends at the drawing
+ports_at = {args.inlet, *args.outlets}
 H = args.height
+origin = (0.0 if "x-" in ports_at else 1.0, 0.0 if "y-" in ports_at else 1.0)
 suffix = os.path.splitext(args.layout)[1].lower()
-common = dict(z=[1.0, 1.0 + H], direction=-1)
+common = dict(z=[1.0, 1.0 + H], direction=-1, origin=origin)
 if suffix == ".dxf":
-    device = Extrusion.from_dxf(args.layout, scale=args.scale, tolerance=0.05 / args.scale,
-                                origin=(0.0, 1.0), **common)
+    device = Extrusion.from_dxf(args.layout, scale=args.scale, tolerance=0.05 / args.scale, **common)
 elif suffix == ".svg":
-    device = Extrusion.from_svg(args.layout, scale=args.scale, tolerance=0.05 / args.scale,
-                                origin=(0.0, 1.0), **common)
+    device = Extrusion.from_svg(args.layout, scale=args.scale, tolerance=0.05 / args.scale, **common)
 elif suffix == ".png":
     if args.pixel_size is None:
         raise SystemExit("device_from_mask: a PNG mask needs --pixel-size (drawing units per pixel)")
-    device = Extrusion.from_mask(args.layout, pixel_size=args.pixel_size * args.scale, solid="black",
-                                 origin=(0.0, 1.0), **common)
+    device = Extrusion.from_mask(args.layout, pixel_size=args.pixel_size * args.scale, solid="black", **common)
 else:
     raise SystemExit(f"device_from_mask: --layout must be a .dxf, .svg or .png file, got {args.layout}")
 vertices = np.concatenate([np.asarray(p) for p in device.polygons])
-length, width = math.ceil(vertices[:, 0].max() - 1e-9), math.ceil(vertices[:, 1].max() + 1.0 - 1e-9)
+length = math.ceil(vertices[:, 0].max() + (0.0 if "x+" in ports_at else 1.0) - 1e-9)
+width = math.ceil(vertices[:, 1].max() + (0.0 if "y+" in ports_at else 1.0) - 1e-9)
 box = [float(length), float(width), H + 2.0]
 system = lbmd.System(box_l=box)
 system.time_step = UNITS.to_lattice(TIME_STEP, "s")
 system.cell_system.skin = 0.3
 
-# --- the fluid: inlet on x-, outlet on x+
+# --- the fluid: the ports found on the box's faces, an inlet and outlets
 visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
 dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
 lbf = lb.LBFluid(agrid=1.0, dens=dens, visc=visc, tau=system.time_step)
 system.actors.add(lbf)
 system.lbboundaries.add(lbboundaries.LBBoundary(shape=device))
 system.constraints.add(shape=device, particle_type=10, penetrable=False)
+
+
+def find_ports(fluid, z):
+    """The runs of fluid nodes on each side face of the box (x-, x+, y-,
+    y+), on the node plane z (the layout is extruded: every height alike).
+    Returns a list of (face, first node, last node) along the face's other
+    in-plane axis (on a side that is no port: none, it is wall)."""
+    flags = np.asarray(fluid[:, :, z].boundary)
+    ports = []
+    for face, line in (("x-", flags[0, :]), ("x+", flags[-1, :]), ("y-", flags[:, 0]), ("y+", flags[:, -1])):
+        fluid_nodes = np.flatnonzero(line == 0)
+        if len(fluid_nodes):
+            for run in np.split(fluid_nodes, np.flatnonzero(np.diff(fluid_nodes) > 1) + 1):
+                ports.append((face, int(run[0]), int(run[-1])))
+    return ports
+
+
+system.prepare()  # the lattice flagged: the ports are read from it
+ports = find_ports(lbf, int(round(0.5 * box[2] - 0.5)))
+inlets = [p for p in ports if p[0] == args.inlet]
+outlets = [p for p in ports if p[0] in args.outlets]
+for face in [args.inlet] + args.outlets:
+    if not any(p[0] == face for p in ports):
+        raise SystemExit(f"device_from_mask: the layout's channel does not reach the face {face} (it reaches "
+                         f"{', '.join(sorted({p[0] for p in ports if p[0] in ports_at})) or 'none'} of "
+                         f"{', '.join(sorted(ports_at))})")
 speed = UNITS.to_lattice(args.speed * 1e-3, "m/s")
-lbf.open_boundaries.add(VelocityInlet(face="x-", profile="poiseuille", mean_velocity=speed))
-lbf.open_boundaries.add(PressureOutlet(face="x+", density=dens))
+lbf.open_boundaries.add(VelocityInlet(face=args.inlet, profile="poiseuille", mean_velocity=speed))
+for face in args.outlets:
+    lbf.open_boundaries.add(PressureOutlet(face=face, density=dens))
+
+
+def port_box(port, depth_from, depth_to):
+    """The box of a port's run of nodes, from depth_from to depth_to (um)
+    inside its face, over the channel's height."""
+    face, first, last = port
+    axis, other = (0, 1) if face[0] == "x" else (1, 0)
+    lo, hi = np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, H + 1.0])
+    lo[other], hi[other] = first, last + 1.0
+    if face[1] == "-":
+        lo[axis], hi[axis] = depth_from, depth_to
+    else:
+        lo[axis], hi[axis] = box[axis] - depth_to, box[axis] - depth_from
+    return lo, hi
+
+
+def port_flow(port):
+    """Volume per time out of the device through a port's run of nodes (the
+    node plane two spacings inside the face; MD units)."""
+    face, first, last = port
+    axis = 0 if face[0] == "x" else 1
+    index = 2 if face[1] == "-" else int(round(box[axis])) - 3
+    plane = lbf[index, :, :] if axis == 0 else lbf[:, index, :]
+    u = np.asarray(plane.velocity)[first:last + 1, :, axis]
+    return float(u.sum()) * (-1.0 if face[1] == "-" else 1.0)  # agrid^2 = 1
+
 
 # --- the cells: stiffer in proportion to the speed (the paper's capillary numbers)
 stiffness = min(args.speed * 1e-3 / PAPER_MEAN_SPEED, STIFFEST)
@@ -133,9 +216,12 @@ gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
 system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
 # contacts: the advised hard_contact (cannot be crossed), stiffer with the membranes
 oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=stiffness)
-inlet_box = ([3.0, 1.0, 1.0], [18.0, width - 1.0, H + 1.0])
-flow = oif.CellFlow(system, rbc, inlet=inlet_box, outlet=length - 5.0, haematocrit=args.haematocrit,
+# cells enter in the first 3..18 um of each inlet run and leave within 5 um
+# of any outlet (a region per outlet run: two branches on one face are two)
+flow = oif.CellFlow(system, rbc, inlet=[port_box(p, 3.0, 18.0) for p in inlets],
+                    outlets=[port_box(p, 0.0, 5.0) for p in outlets], haematocrit=args.haematocrit,
                     boundaries=[device], seed=args.seed, particle_mass=gamma * system.time_step / 0.3)
+port_names = [f"{face} {first}..{last + 1} um" for face, first, last in outlets]
 
 # --- outputs
 os.makedirs(args.output, exist_ok=True)
@@ -152,7 +238,7 @@ events_file = open(os.path.join(args.output, "events.csv") if rank0 else os.devn
 cells_csv, events_csv = csv.writer(cells_file), csv.writer(events_file)
 cells_csv.writerow(["time_ms", "cell", "x_um", "y_um", "z_um", "vx_mm_s", "vy_mm_s", "vz_mm_s", "volume_um3",
                     "surface_um2", "extent_um"])
-events_csv.writerow(["time_ms", "cell", "event", "x_um", "y_um", "z_um"])
+events_csv.writerow(["time_ms", "cell", "event", "x_um", "y_um", "z_um", "outlet"])
 if args.vtk:
     lbmd.vtk_output.write_wall_surface(os.path.join(args.output, "walls.vtp"), lbf)
     cell_series = oif.CellSeries(os.path.join(args.output, "cells.pvd"))
@@ -161,10 +247,12 @@ if args.vtk:
 
 
 def log_events(added, removed, t):
+    exits = {cell_id: k for cell_id, _, k in flow.exits}
     for kind, group in (("in", added), ("out", removed)):
         for c in group:
             x, y, z = c.get_origin() if kind == "in" else c.last_origin
-            events_csv.writerow([f"{t:.4f}", c.cell_id, kind, f"{x:.3f}", f"{y:.3f}", f"{z:.3f}"])
+            where = port_names[exits[c.cell_id]] if kind == "out" else ""
+            events_csv.writerow([f"{t:.4f}", c.cell_id, kind, f"{x:.3f}", f"{y:.3f}", f"{z:.3f}", where])
 
 
 def record():
@@ -188,9 +276,23 @@ say(f"device {os.path.basename(args.layout)} x {args.scale:g} um: box {box[0]:g}
     f"height {H:g} um; inlet mean speed {args.speed:g} mm/s; haematocrit {args.haematocrit:g} at the inlet; "
     f"membranes {stiffness:.3g}x the paper's moduli; {to_ms(n_outputs * steps_per_output * system.time_step):g} ms "
     f"in {n_outputs} outputs")
+def picture(name):
+    """The device and its cells seen from above: a PNG in the output
+    folder; collective."""
+    if args.no_plots:
+        return
+    import lbmd.visualization
+    path = os.path.join(args.output, name)
+    fig = lbmd.visualization.cells(system, flow.cells, mode="projected", units=UNITS, ids=False, save=path)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    say(f"picture: {path}")
+
+
 added, removed = flow.update()
 log_events(added, removed, to_ms(system.time))
 record()
+picture("scene_start.png")
 for i in range(n_outputs):
     system.integrator.run(steps_per_output)
     added, removed = flow.update()
@@ -198,10 +300,16 @@ for i in range(n_outputs):
     record()
 cells_file.close()
 events_file.close()
+picture("scene_end.png")
 volumes = [c.volume() for c in flow.cells]
-say(f"{len(flow.added)} cells entered, {len(flow.removed)} left; {len(flow.cells)} in the device at the end; "
-    f"inlet-to-outlet mass flux balance {lbf.open_boundaries.mass_flux('x-') / -lbf.open_boundaries.mass_flux('x+'):.4f}"
+fluxes = {f.face: lbf.open_boundaries.mass_flux(f.face) for f in lbf.open_boundaries}
+flows = [port_flow(p) for p in outlets]
+say(f"{len(flow.added)} cells entered, {len(flow.removed)} left; {len(flow.cells)} in the device at the end"
     + (f"; cell volumes {min(volumes):.1f}-{max(volumes):.1f} um^3" if volumes else ""))
+say("mass flux out of the device over the mass flux in: "
+    f"{-sum(v for k, v in fluxes.items() if k != args.inlet) / fluxes[args.inlet]:.4f}")
+for name, q, n in zip(port_names, flows, flow.exit_counts()):
+    say(f"  outlet {name}: {100 * q / sum(flows):5.1f} % of the flow, {n} cells left by it")
 say(system.integrator.timing_report())
 
 if rank0 and not args.no_plots:
@@ -222,9 +330,11 @@ if rank0 and not args.no_plots:
     ax.set_aspect("equal")
     ax.set_xlabel("x (um)")
     ax.set_ylabel("y (um)")
-    ax.set_title(f"RBC paths through the constriction ({len(flow.added)} cells in, {len(flow.removed)} out)")
+    ax.set_title(f"RBC paths through {os.path.basename(args.layout)} ({len(flow.added)} cells in, "
+                 f"{len(flow.removed)} out: " + ", ".join(str(n) for n in flow.exit_counts()) + " by outlet)")
     fig.tight_layout()
     fig.savefig(os.path.join(args.output, "device_trajectories.png"), dpi=110)
     say(f"figure: {os.path.join(args.output, 'device_trajectories.png')}")
 say(f"output in {os.path.abspath(args.output)}/: cells.csv, events.csv, scene.json"
-    + (", walls.vtp, cells.pvd, fluid.pvd" if args.vtk else ""))
+    + ("" if args.no_plots else ", scene_start.png, scene_end.png, device_trajectories.png")
+    + (", walls.vtp, cells.pvd, fluid.pvd (ParaView)" if args.vtk else ""))

@@ -104,6 +104,111 @@ class FlowThrough(unittest.TestCase):
         with self.assertRaises(TypeError):
             oif.CellFlow(s, "rbc", inlet=inlet, outlet=L - 3, recycle=True)
 
+    def test_several_outlets(self):
+        """Planes on any face and regions: each cell leaves by the outlet
+        it reached, logged with its index; a list of inlets is filled each."""
+        s = lbmd.System(box_l=[40.0, 40.0, 12.0])
+        s.time_step = 0.1
+        s.cell_system.skin = 0.3
+        rbc = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(2.0,) * 3, ks=0.01, kb=0.01,
+                              kal=0.01, kag=0.1, kv=0.1, normal=True)
+        inlets = [([2.0, 2.0, 2.0], [12.0, 12.0, 10.0]), ([2.0, 26.0, 2.0], [12.0, 36.0, 10.0])]
+        flow = oif.CellFlow(s, rbc, inlet=inlets, outlets=[("x+", 35.0), ("y-", 1.5), ([20.0, 30.0, 0.0],
+                                                                                        [30.0, 40.0, 12.0])],
+                            recycle=True, seed=4)
+        flow.cells = [oif.OifCell(cell_type=rbc, particle_type=0, origin=p)
+                      for p in ([20.0, 20.0, 6.0], [20.0, 8.0, 6.0], [10.0, 20.0, 6.0], [15.0, 33.0, 6.0])]
+        moves = {0: [34.0, 20.0, 6.0],   # reaches x >= 35: outlet 0
+                 1: [20.0, 3.0, 6.0],    # reaches y <= 1.5: outlet 1
+                 3: [22.0, 33.0, 6.0]}   # into the region: outlet 2
+        for k, pos in moves.items():
+            flow.cells[k].set_origin(pos)
+        kept = flow.cells[2]
+        added, removed = flow.update()
+        self.assertEqual(len(removed), 3)
+        self.assertEqual(sorted(k for _, _, k in flow.exits), [0, 1, 2])
+        self.assertEqual(flow.exit_counts(), [1, 1, 1])
+        self.assertIn(kept, flow.cells)
+        # recycled: as many placed again, each in one of the two inlet boxes
+        self.assertEqual(len(added), 3)
+        for c in added:
+            centre = c.get_origin()
+            self.assertTrue(any(np.all(centre >= np.array(lo) - 1e-9) and np.all(centre <= np.array(hi) + 1e-9)
+                                for lo, hi in inlets), centre)
+
+    def device_run(self, polygon, open_faces, outlets):
+        """Cells (stiff spheres, radius 1.8) carried through a channel drawn
+        as `polygon` (z 1..7; corners met head on chamfered: a sharp one
+        pins a cell and crushes it, as in a real device) from a Poiseuille
+        inlet on x- to pressure outlets on `open_faces`, for 6000 steps;
+        returns (mass flux out / in, CellFlow)."""
+        s = lbmd.System(box_l=[40.0, 30.0, 8.0])
+        s.time_step = 0.1
+        s.cell_system.skin = 0.3
+        s.cell_drift_tolerance = 0.1  # squeezed past the walls, within 10 %
+        lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1)
+        s.actors.add(lbf)
+        walls = [shapes.Extrusion(polygons=[polygon], z=[1.0, 7.0], direction=-1)]
+        for w in walls:
+            s.lbboundaries.add(lbboundaries.LBBoundary(shape=w))
+            s.constraints.add(shape=w, particle_type=10, penetrable=False)
+        lbf.open_boundaries.add(VelocityInlet(face="x-", profile="poiseuille", mean_velocity=0.1))
+        for face in open_faces:
+            lbf.open_boundaries.add(PressureOutlet(face=face, density=1.0))
+        sphere = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(1.8,) * 3, ks=0.5, kb=0.1,
+                                 kal=0.5, kag=0.7, kv=0.9, normal=True)
+        s.thermostat.set_lb(LB_fluid=lbf, gamma=sphere.suggest_LBgamma(visc=1.5, dens=1.0))
+        oif.set_contacts(s, sphere, particle_types=0, wall_types=10)
+        flow = oif.CellFlow(s, sphere, inlet=([2.0, 11.0, 1.0], [9.0, 19.0, 7.0]), outlets=outlets, rate=0.05,
+                            boundaries=walls, seed=2)
+        for _ in range(60):
+            s.integrator.run(100)
+            flow.update()
+        inflow = lbf.open_boundaries.mass_flux("x-")
+        outflow = -sum(lbf.open_boundaries.mass_flux(face) for face in open_faces)
+        self.assertTrue(np.all(np.isfinite(s.part.all().pos)))
+        self.assertEqual(sum(flow.exit_counts()), len(flow.removed))
+        print(f"{self.id()}: mass out / in {outflow / inflow:.4f}, cells in {len(flow.added)}, out by "
+              f"outlet {flow.exit_counts()}")
+        return outflow / inflow, flow
+
+    def test_t_junction_cells_leave_by_both(self):
+        """A T-junction: the main channel y 10..20 from x- to x+, a side
+        branch x 16..26 up to y+ (whose opposite face y- is solid): mass in
+        = mass out within 1 %, cells leave by both outlets."""
+        balance, flow = self.device_run(
+            [[0, 10], [40, 10], [40, 20], [29, 20], [26, 23], [26, 31], [16, 31], [16, 23], [13, 20], [0, 20]],
+            ["x+", "y+"], [("x+", 36.0), ("y+", 26.0)])
+        self.assertAlmostEqual(balance, 1.0, delta=0.01)
+        self.assertTrue(all(n > 0 for n in flow.exit_counts()), flow)
+
+    def test_bifurcation_cells_leave_by_both(self):
+        """A bifurcation: the inlet channel y 10..20 splits around an
+        island (its apex chamfered) into branches y 2..10 and y 20..28 that
+        both end on x+: two outlet regions on one face. Mass in = mass out
+        within 1 %, cells leave by both branches."""
+        balance, flow = self.device_run(
+            [[0, 10], [12, 10], [18, 2], [40, 2], [40, 10], [27, 10], [24, 13], [24, 17], [27, 20], [40, 20],
+             [40, 28], [18, 28], [12, 20], [0, 20]],
+            ["x+"], [([36.0, 0.0, 0.0], [40.0, 10.0, 8.0]), ([36.0, 20.0, 0.0], [40.0, 30.0, 8.0])])
+        self.assertAlmostEqual(balance, 1.0, delta=0.01)
+        self.assertTrue(all(n > 0 for n in flow.exit_counts()), flow)
+
+    def test_several_outlets_refused(self):
+        s, flow = scene(1, "haematocrit")
+        rbc = flow.types[0]
+        inlet = ([1.0, 1.0, 1.0], [10.0, W - 1.0, H - 1.0])
+        with self.assertRaisesRegex(ValueError, "exactly one of 'outlet'"):
+            oif.CellFlow(s, rbc, inlet=inlet, outlet=L - 3, outlets=[("x+", L - 3)], recycle=True)
+        with self.assertRaisesRegex(ValueError, "face must be one of"):
+            oif.CellFlow(s, rbc, inlet=inlet, outlets=[("up", 5.0)], recycle=True)
+        with self.assertRaisesRegex(ValueError, "beyond every inlet box"):
+            oif.CellFlow(s, rbc, inlet=inlet, outlets=[("x-", 5.0)], recycle=True)
+        with self.assertRaisesRegex(ValueError, "overlaps the inlet box"):
+            oif.CellFlow(s, rbc, inlet=inlet, outlets=[([5.0, 0.0, 0.0], [15.0, W, H])], recycle=True)
+        with self.assertRaisesRegex(ValueError, "plane .* or a region"):
+            oif.CellFlow(s, rbc, inlet=inlet, outlets=[42.0], recycle=True)
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -47,7 +47,8 @@ def result_lines(stdout):
     """The lines of a sample's result that are not a numeric table row: the
     bifurcation's scene line, branch entries and the cells' drift."""
     return [line for line in stdout.splitlines()
-            if line.startswith(("cycle ", "share ", "small scene", "branch entries", "largest change"))]
+            if line.startswith(("cycle ", "share ", "small scene", "branch entries", "largest change",
+                                "mass flux out", "  outlet "))]
 
 
 def files_under(folder):
@@ -93,6 +94,16 @@ class SamplesUnderMpirun(unittest.TestCase):
         self.check_same_as_serial("cell_flow_in_bifurcation.py", "--cells", "4", "--cycles", "2", "--steps", "100",
                                   "--output", "out", csv_files=("out/cells.csv", "out/branches.csv", "out/crossings.csv",
                                              "out/haematocrit.csv", "out/scene.json"))
+
+    def test_device_t_junction(self):
+        """The T-junction layout: an inlet on x-, outlets on x+ and on y+ (its
+        opposite face closed by the channel's floor); the cells' table and
+        their entries and exits (by outlet) bit for bit at 1 and 2 ranks."""
+        layout = os.path.join(SOURCE, "samples", "data", "t_junction.svg")
+        self.check_same_as_serial("device_from_mask.py", "--layout", layout, "--outlets", "x+", "y+", "--scale", "1.5",
+                                  "--speed", "35", "--duration", "0.3",
+                                  "--output-every", "50", "--haematocrit", "0.1", "--output", "tj", "--no-plots",
+                                  csv_files=("tj/cells.csv", "tj/events.csv", "tj/scene.json"))
 
     def test_bifurcation_rare(self):
         self.check_same_as_serial("cell_flow_in_bifurcation.py", "--cells", "2", "--rare", "--cycles", "1",

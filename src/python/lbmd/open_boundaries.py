@@ -7,9 +7,11 @@ outlets (``lbf.open_boundaries``).
     lbf.open_boundaries.add(outlet)
 
 A face is a side of the box: "x-" (the node plane x = 0), "x+" (the last
-plane), "y-", "y+", "z-", "z+". The lattice is periodic, so an axis with an
-open face has both faces open (an inlet and an outlet, or two outlets at
-different densities: a pressure-driven flow). After every lattice update
+plane), "y-", "y+", "z-", "z+". The lattice is periodic, so the face opposite an
+open face is either open too (an inlet and an outlet, or two outlets at
+different densities: a pressure-driven flow) or closed by walls where it
+meets the open face across the periodic edge (a T-junction's side outlet
+on y+ above a channel floor on y-); any number of faces may be open. After every lattice update
 the face planes take the populations of the non-equilibrium extrapolation
 scheme (Guo, Zheng & Shi, Chin. Phys. 11, 366 (2002); second order): the
 equilibrium at the face's density and velocity plus the non-equilibrium part
@@ -232,9 +234,9 @@ class OpenBoundaries:
         return f"OpenBoundaries({self._list!r})"
 
     def _apply(self):
-        """Sends the faces to the C++ fluid, when it exists; an axis open on
-        one face only waits for its other face (the check runs at the run's
-        start, in mass_flux and here once both or none are there)."""
+        """Sends the faces to the C++ fluid, when it exists (whether a face
+        open alone has its opposite face closed is checked at the run's
+        start and in mass_flux, once the walls are flagged)."""
         core = self._fluid._core
         if core is None:
             return
@@ -247,21 +249,14 @@ class OpenBoundaries:
             else:
                 specs.append((axis, high, False, f.face_velocities(self._fluid).ravel().tolist(), 0.0,
                               f.flow_rate or 0.0))
-        axes = {}
-        for axis, high, *_ in specs:
-            axes.setdefault(axis, set()).add(high)
         # the flow-rate controllers keep their gains when the faces stay
         # (profiles made again after the walls changed)
         faces = [(axis, high, pressure) for axis, high, pressure, *_ in specs]
         gains = list(core.open_boundary_gains()) if faces == self.__dict__.get("_faces") else None
-        if all(len(s) == 2 for s in axes.values()):
-            core.set_open_boundaries(specs)
-            self._faces = faces
-            if gains is not None and len(gains) == len(specs):
-                core.set_open_boundary_gains(gains)
-        else:
-            core.set_open_boundaries([])
-            self._faces = []
+        core.set_open_boundaries(specs)
+        self._faces = faces
+        if gains is not None and len(gains) == len(specs):
+            core.set_open_boundary_gains(gains)
 
     def _wall_signature(self):
         """Which boundaries the system has (the inlet profiles follow them)."""
@@ -269,20 +264,29 @@ class OpenBoundaries:
         return tuple(id(b) for b in system.lbboundaries) if system is not None else ()
 
     def _before_run(self):
-        """At a run's start: both faces of each open axis there, and inlet
-        profiles made again if the walls changed since."""
+        """At a run's start: each face's opposite face open or closed, and
+        inlet profiles made again if the walls changed since."""
         self.check_complete()
         if self._wall_signature() != self.__dict__.get("_walls"):
             self._apply()
 
     def check_complete(self):
-        """ValueError naming the face whose opposite face is not open."""
-        opened = {_face("", f.face): f.face for f in self._list}
-        for (axis, high), name in opened.items():
-            if (axis, not high) not in opened:
-                other = name[0] + ("-" if high else "+")
-                raise ValueError(f"open boundary {name}: the lattice is periodic, so the opposite face "
-                                 f"{other} must be open too (add a VelocityInlet or PressureOutlet there)")
+        """ValueError naming a face whose opposite face is neither open nor
+        closed by walls where the two meet across the periodic edge
+        (collective: the lattice is flagged first)."""
+        if not self._list or self._fluid._system is None:
+            return  # (checked when the fluid is in a system and runs)
+        self._fluid._system.prepare()
+        leaks = self._fluid._checked_core().open_seam_leaks()
+        for f, n in zip(self._list, leaks):
+            if n:
+                other = f.face[0] + ("-" if f.face[1] == "+" else "+")
+                raise ValueError(
+                    f"open boundary {f.face}: the lattice is periodic along {f.face[0]}, and the opposite "
+                    f"face {other} is neither open nor closed where it meets {f.face}: {n} fluid nodes of "
+                    f"{other} would take what {f.face} streams across the periodic edge. Open {other} too "
+                    f"(a VelocityInlet or PressureOutlet) or close it with a wall there (an LBBoundary "
+                    f"covering the {other} plane wherever {f.face} is open)")
 
     def mass_flux(self, face):
         """Mass per time entering the fluid through an open face (negative:
