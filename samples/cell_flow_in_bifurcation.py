@@ -6,7 +6,7 @@ scene of the PyOIF paper's study (its Figs 2-5), its physical inputs in SI.
     pyoif samples/cell_flow_in_bifurcation.py [--small | --full] [--case A|B|C]
           [--cells N | --haematocrit H] [--rare | --no-rare] [--stiff-fraction F] [--seed S] [--orientation auto|random|flat]
           [--duration MS] [--output-every US]
-          [--speed MM_S] [--height UM] [--output DIR] [--vtk] [--no-plots]
+          [--speed MM_S] [--height UM] [--output DIR] [--vtk | --no-vtk] [--no-plots]
           [--progress auto|bar|lines|off] [--checkpoint FILE] [--checkpoint-every MS]
           [--resume]
 
@@ -49,9 +49,12 @@ Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
   each branch (a cell counts where its centre is), with --stiff-fraction
   also the stiff cells' alone -- Fig 5;
 - walls.vtp, cells.pvd (+ .vtp) and fluid.pvd (+ .vti, the mid-height
-  plane) with --vtk, for ParaView;
+  plane), for ParaView: by default at the small size (--no-vtk: none),
+  with --vtk at the full one;
+- scene_start.png, scene_end.png: the device and its cells seen from above
+  (lbmd.visualization) at the start and the end;
 - bifurcation_fig2..5.png from samples/analysis/plot_bifurcation.py (also
-  run by hand to combine seeds; --no-plots skips it).
+  run by hand to combine seeds; --no-plots skips these and the pictures).
 - checkpoint.h5 (or --checkpoint FILE): the whole state, written on
   SIGTERM or SIGUSR1 (a batch system's walltime warning; the run then exits
   with status 75) and every --checkpoint-every ms of flow (default 10 with
@@ -181,7 +184,11 @@ def parse_arguments(argv=None):
     ap.add_argument("--stiffness", type=float, default=None,
                     help="membrane moduli relative to the paper's (default: --speed / 1.3 mm/s)")
     ap.add_argument("--output", default="output_bifurcation", help="output folder")
-    ap.add_argument("--vtk", action="store_true", help="write cells, fluid (mid-height plane) and walls for ParaView")
+    vtk = ap.add_mutually_exclusive_group()
+    vtk.add_argument("--vtk", action="store_true",
+                     help="write cells, fluid (mid-height plane) and walls for ParaView (the default at the "
+                          "small size)")
+    vtk.add_argument("--no-vtk", action="store_true", help="write no ParaView files")
     ap.add_argument("--no-plots", action="store_true", help="do not make the PNG figures at the end")
     ap.add_argument("--progress", choices=("auto", "bar", "lines", "off"), default="auto",
                     help="progress bar (auto: on a terminal), a line per output, or nothing")
@@ -227,6 +234,8 @@ if args.resume:  # the scene, the cells and this script's bookkeeping as the che
     args.__dict__.update(kept)
 size_name = "full" if args.full else "small"
 size = SIZES[size_name]
+# ParaView's files: by default at the small size (a few MB), asked for at the full one
+args.vtk = bool(args.vtk or (size_name == "small" and not getattr(args, "no_vtk", False)))
 n_rbc = args.cells if args.cells is not None else size["cells"]
 n_stiff = int(round(args.stiff_fraction * n_rbc))  # of the n_rbc, the stiffer population (particle type 2)
 rare = (args.rare or size["rare"]) and not getattr(args, "no_rare", False)  # (checkpoints before --no-rare)
@@ -630,8 +639,24 @@ every = args.checkpoint_every if args.checkpoint_every is not None else (10.0 if
 steps_per_checkpoint = (max(1, int(round(UNITS.to_lattice(every * 1e-3, "s") / time_step / steps_per_output)))
                         * steps_per_output if every else None)
 system.integrator.reset_timings()  # the report below covers the cells' run, not the calibration
+
+
+def picture(name):
+    """The device and its cells seen from above (the cells projected on the
+    mid-height plane's walls): a PNG in the output folder; collective."""
+    if args.no_plots:
+        return
+    import lbmd.visualization
+    path = os.path.join(args.output, name)
+    fig = lbmd.visualization.cells(system, cells, mode="projected", units=UNITS, ids=False, save=path)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    say(f"picture: {path}")
+
+
 if resumed is None:
     record()
+    picture("scene_start.png")
 progress = lbmd.progress.Bar(total_steps, initial=outputs_done * steps_per_output, mode=args.progress)
 for i in range(outputs_done + 1, n_outputs + 1):
     # up to the output's step (a run resumed from a walltime checkpoint
@@ -645,6 +670,7 @@ for i in range(outputs_done + 1, n_outputs + 1):
 progress.close()
 for table in tables.values():
     table.close()
+picture("scene_end.png")
 
 # --- results
 counts = {b: sum(v == b for v in entered.values()) for b in ("lower", "upper")}
@@ -668,4 +694,5 @@ if rank0 and not args.no_plots:
     figures = plot_bifurcation.make_figures([args.output], args.output)
     say("figures: " + ", ".join(os.path.basename(f) for f in figures))
 say(f"output in {os.path.abspath(args.output)}/: cells.csv, branches.csv, crossings.csv, haematocrit.csv"
-    + (", walls.vtp, cells.pvd, fluid.pvd" if args.vtk else ""))
+    + ("" if args.no_plots else ", scene_start.png, scene_end.png")
+    + (", walls.vtp, cells.pvd, fluid.pvd (ParaView)" if args.vtk else ""))

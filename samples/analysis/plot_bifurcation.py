@@ -176,23 +176,30 @@ def figure4(runs, plt, max_cells=3):
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     colours = {"lower": "tab:blue", "upper": "tab:orange", None: "0.6"}
     styles = ["-", "--", ":", "-."]
-    shown = set()
+    branches_seen = []
     for j, k in enumerate(chosen):
         mine = c["cell"] == k
         for lap in np.unique(c["pass"][mine]):
             sel = mine & (c["pass"] == lap)
             name = branch_of.get((k, int(lap)))
-            label = f"{name or 'no'} branch" if name not in shown else None
-            shown.add(name)
+            if name not in branches_seen:
+                branches_seen.append(name)
             for ax, key in zip(axes, ("surface_um2", "diameter_um", "rotation_deg")):
-                ax.plot(c["x_um"][sel], c[key][sel], styles[j % len(styles)], color=colours[name], lw=1.2,
-                        label=label if key == "surface_um2" else None)
+                ax.plot(c["x_um"][sel], c[key][sel], styles[j % len(styles)], color=colours[name], lw=1.2)
+    # the legend names both codes: the line style is the cell, the colour the
+    # branch that pass went through
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color="k", ls=styles[j % len(styles)], lw=1.2, label=f"cell {k}")
+               for j, k in enumerate(chosen)]
+    handles += [Line2D([], [], color=colours[name], lw=2.5,
+                       label=f"pass through the {name} branch" if name else "pass with no branch entered")
+                for name in branches_seen]
     scene = run["scene"]
     for ax, name in zip(axes, ("surface (um^2)", "diameter (um)", "rotation angle (deg)")):
         ax.set_ylabel(name)
         for x in (scene["split_um"], scene["join_um"]):
             ax.axvline(x, color="k", lw=0.8, ls=":")
-    axes[0].legend(fontsize=8, title=f"cells {', '.join(map(str, chosen))} (line style)", title_fontsize=8)
+    axes[0].legend(handles=handles, fontsize=8, ncol=2, title="line style: cell; colour: branch", title_fontsize=8)
     axes[-1].set_xlabel("x of the cell centre (um); dotted: bifurcation and confluence")
     fig.suptitle(f"Fig 4: single RBCs through the bifurcation (case {scene['case']}, {run['folder']})")
     fig.tight_layout()

@@ -29,6 +29,24 @@ def guide_pages():
 
 
 class GuideExamples(unittest.TestCase):
+    def test_study_cited_alike(self):
+        """The bifurcation study the flagship reproduces is the PyOIF
+        paper's (doc/model.md's citation, doi 10.1371/journal.pcbi.1008249):
+        every page that introduces it names that paper, none another."""
+        with open(os.path.join(SOURCE, "doc", "model.md")) as f:
+            self.assertIn("doi:10.1371/journal.pcbi.1008249", f.read())
+        for rel in ("doc/tutorial.md", "doc/study.md", "samples/cell_flow_in_bifurcation.py", "README.md"):
+            with open(os.path.join(SOURCE, rel)) as f:
+                text = " ".join(f.read().split())
+            if "bifurcation" not in text:
+                continue
+            with self.subTest(page=rel):
+                self.assertTrue("PyOIF paper" in text or "e1008249" in text,
+                                f"{rel} speaks of the bifurcation study without naming the PyOIF paper")
+                # the coupling's calibration is Busik et al.'s, the study is not
+                for other in ("Bušík, Slavík, Cimrák, 2020", "Busik, Slavik, Cimrak, 2020"):
+                    self.assertNotIn(other, text, f"{rel} credits the study to another paper")
+
     def test_every_example_runs(self):
         ran = 0
         for page in guide_pages():
