@@ -4,7 +4,7 @@ device from a CAD file, an inlet and as many outlets as the layout has,
 cells entering at a set haematocrit and leaving by every outlet.
 
     pyoif samples/device_from_mask.py [--layout samples/data/constriction.dxf]
-          [--scale UM] [--height UM] [--inlet x-] [--outlets x+ [y+ ...]] [--speed MM_S] [--haematocrit H]
+          [--scale UM] [--height UM] [--inlet x-] [--outlets x+ [y+ ...]] [--speed MM_S] [--speedup S] [--haematocrit H]
           [--duration MS] [--output-every US] [--seed S] [--output DIR] [--no-vtk] [--no-plots]
 
 The device: a layout -- samples/data/constriction.dxf (default; or .svg, or
@@ -24,7 +24,7 @@ and each of the --outlets faces (default x+; the T-junction: x+ y+) the
 drawn channel must reach the box's side; each run of fluid nodes it has
 there (read from the lattice's boundary flags) is a port. Plasma (1000
 kg/m^3, 1.5 mPa s) enters the inlet ports through a Poiseuille velocity
-inlet at a mean speed --speed (mm/s, default 30) and leaves through pressure
+inlet and leaves through pressure
 outlets at the plasma's density on the outlet faces (lbmd.open_boundaries;
 a face whose opposite face is closed by wall may be open alone, as the
 T-junction's y+). The cells: red blood cells (rbc374, radius 3.91
@@ -32,11 +32,17 @@ um) enter in the first 3..18 um of each inlet run (oif.CellFlow: random
 positions and orientations, seeded, never overlapping) while the
 haematocrit there is below --haematocrit (default 0.1), and are removed
 within 5 um of any outlet run (one CellFlow outlet region per run: two
-branches ending on one face are two outlets). As in the flagship sample the
-membranes are stiffer in proportion to the speed (the capillary numbers of
-the paper's RBCs at 1.3 mm/s; at most 27 x their moduli), with a light
-node mass and a small membrane viscosity. (At most 27x, the flagship's --small:
-40x and 60x broke here within 1 ms at 45 and 60 mm/s.)
+branches ending on one face are two outlets).
+
+The numbers: every one from SI inputs by oif.scene_parameters, printed with
+its reason and expected error at the start: --speed is the real mean speed
+at the inlet (mm/s, default 1.1); the scene runs S times faster (default
+chosen: 27, the stiffest membranes the samples held at the time step of
+0.1 us; --speedup S) with the paper's membrane moduli S times stiffer, so
+the capillary number, and so the cells' deformation, is the real speed's
+(40x and 60x broke here within 1 ms); lattice spacing 1 um, time step 0.1
+us, the calibrated coupling friction, a light node mass (gamma dt / m =
+0.3) and the advised contacts stiffened with the membranes.
 
 Printed at the end: the mass flux out of the device over the mass flux in,
 and per outlet its share of the flow and the cells that left by it.
@@ -61,20 +67,14 @@ import oif
 from lbmd import file_output, lb, lbboundaries
 from lbmd.open_boundaries import PressureOutlet, VelocityInlet
 from lbmd.shapes import Extrusion
-from lbmd.units import UnitSystem, oif_moduli_from_si
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 FACES = ("x-", "x+", "y-", "y+")  # the box's sides in the layout's plane
-UNITS = UnitSystem()  # um, us, 1e-15 kg
+# every number of the scene from the SI inputs below and the command line:
+# oif.scene_parameters (lattice spacing, time step, speed-up with the
+# membranes stiffened to match, friction, node mass, contacts; printed with
+# the reasons at the start)
 PLASMA_DENSITY, PLASMA_VISCOSITY = 1000.0, 1.5e-3      # kg/m^3, Pa s
-RBC_RADIUS = 3.91e-6                                   # m
-# the PyOIF paper's RBC membrane (see cell_flow_in_bifurcation.py)
-RBC_MEMBRANE = dict(shear_modulus=2.1651e-6, bending_modulus=1.7321e-17, local_area_modulus=3.5e-6,
-                    global_area_modulus=3.5e-4, volume_modulus=900.0)
-MEMBRANE_VISCOSITY = 4.33e-10                          # Pa s m (kvisc 1.0)
-PAPER_MEAN_SPEED = 1.3e-3 / 1.5                        # m/s: the paper's centre line 1.3 mm/s, as a mean
-STIFFEST = 27.0                                        # as the flagship's --small (held 8 ms there)
-TIME_STEP = 1e-7                                       # s
 
 
 def parse_arguments(argv=None):
@@ -84,7 +84,10 @@ def parse_arguments(argv=None):
     ap.add_argument("--pixel-size", type=float, default=None, help="drawing units per pixel of a PNG mask")
     ap.add_argument("--scale", type=float, default=1.5, help="um per drawing unit")
     ap.add_argument("--height", type=float, default=12.0, help="channel height in um")
-    ap.add_argument("--speed", type=float, default=30.0, help="mean speed at the inlet in mm/s")
+    ap.add_argument("--speed", type=float, default=1.1,
+                    help="the real mean speed at the inlet in mm/s; the scene runs it S times faster with the "
+                         "membranes S times stiffer (oif.scene_parameters: S = 27 here)")
+    ap.add_argument("--speedup", type=float, default=None, help="S (default: chosen by oif.scene_parameters)")
     ap.add_argument("--haematocrit", type=float, default=0.1, help="haematocrit kept in the inlet region")
     ap.add_argument("--duration", type=float, default=3.0, help="simulated time in ms")
     ap.add_argument("--output-every", type=float, default=20.0, help="output interval in us")
@@ -138,14 +141,17 @@ vertices = np.concatenate([np.asarray(p) for p in device.polygons])
 length = math.ceil(vertices[:, 0].max() + (0.0 if "x+" in ports_at else 1.0) - 1e-9)
 width = math.ceil(vertices[:, 1].max() + (0.0 if "y+" in ports_at else 1.0) - 1e-9)
 box = [float(length), float(width), H + 2.0]
+plan = oif.scene_parameters(narrowest=H * 1e-6, mean_speed=args.speed * 1e-3, plasma_viscosity=PLASMA_VISCOSITY,
+                            plasma_density=PLASMA_DENSITY, speedup=args.speedup)
+UNITS = plan.units  # um, us, 1e-15 kg
+say(plan)
 system = lbmd.System(box_l=box)
-system.time_step = UNITS.to_lattice(TIME_STEP, "s")
+system.time_step = plan.time_step
 system.cell_system.skin = 0.3
 
 # --- the fluid: the ports found on the box's faces, an inlet and outlets
-visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
-dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
-lbf = lb.LBFluid(agrid=1.0, dens=dens, visc=visc, tau=system.time_step)
+dens = plan.dens
+lbf = lb.LBFluid(**plan.fluid)
 system.actors.add(lbf)
 system.lbboundaries.add(lbboundaries.LBBoundary(shape=device))
 system.constraints.add(shape=device, particle_type=10, penetrable=False)
@@ -175,8 +181,7 @@ for face in [args.inlet] + args.outlets:
         raise SystemExit(f"device_from_mask: the layout's channel does not reach the face {face} (it reaches "
                          f"{', '.join(sorted({p[0] for p in ports if p[0] in ports_at})) or 'none'} of "
                          f"{', '.join(sorted(ports_at))})")
-speed = UNITS.to_lattice(args.speed * 1e-3, "m/s")
-lbf.open_boundaries.add(VelocityInlet(face=args.inlet, profile="poiseuille", mean_velocity=speed))
+lbf.open_boundaries.add(VelocityInlet(face=args.inlet, profile="poiseuille", mean_velocity=plan.speed))
 for face in args.outlets:
     lbf.open_boundaries.add(PressureOutlet(face=face, density=dens))
 
@@ -206,31 +211,29 @@ def port_flow(port):
     return float(u.sum()) * (-1.0 if face[1] == "-" else 1.0)  # agrid^2 = 1
 
 
-# --- the cells: stiffer in proportion to the speed (the paper's capillary numbers)
-stiffness = min(args.speed * 1e-3 / PAPER_MEAN_SPEED, STIFFEST)
-moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()},
-                            membrane_viscosity=MEMBRANE_VISCOSITY)
-rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(UNITS.to_lattice(RBC_RADIUS, "m"),) * 3,
-                      normal=True, **moduli)
-gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
-# contacts: the advised hard_contact (cannot be crossed), stiffer with the membranes
-oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=stiffness)
+# --- the cells: the paper's red cells, their membranes S times stiffer
+# (the capillary number of the real speed), the plan's friction and contacts
+stiffness = plan.speedup
+rbc = oif.OifCellType(*oif.mesh_files(plan.mesh), system=system, resize=plan.resize, normal=True, **plan.moduli)
+system.thermostat.set_lb(LB_fluid=lbf, gamma=plan.gamma)
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=plan.contact_scale)
 # cells enter in the first 3..18 um of each inlet run and leave within 5 um
 # of any outlet (a region per outlet run: two branches on one face are two)
 flow = oif.CellFlow(system, rbc, inlet=[port_box(p, 3.0, 18.0) for p in inlets],
                     outlets=[port_box(p, 0.0, 5.0) for p in outlets], haematocrit=args.haematocrit,
-                    boundaries=[device], seed=args.seed, particle_mass=gamma * system.time_step / 0.3)
+                    boundaries=[device], seed=args.seed, particle_mass=plan.node_mass)
 port_names = [f"{face} {first}..{last + 1} um" for face, first, last in outlets]
 
 # --- outputs
 os.makedirs(args.output, exist_ok=True)
-steps_per_output = max(1, int(round(args.output_every * 1e-6 / TIME_STEP)))
-n_outputs = max(1, int(round(args.duration * 1e-3 / TIME_STEP / steps_per_output)))
+time_step_s = UNITS.to_si(system.time_step, "s")
+steps_per_output = max(1, int(round(args.output_every * 1e-6 / time_step_s)))
+n_outputs = max(1, int(round(args.duration * 1e-3 / time_step_s / steps_per_output)))
 to_ms = lambda t: UNITS.to_si(t, "s") * 1e3  # noqa: E731
 to_mm_s = lambda v: UNITS.to_si(v, "m/s") * 1e3  # noqa: E731
 file_output.write_text(os.path.join(args.output, "scene.json"), json.dumps(dict(
     layout=os.path.basename(args.layout), scale_um=args.scale, box_um=box, height_um=H, speed_mm_s=args.speed,
+    speedup=plan.speedup,
     haematocrit=args.haematocrit, stiffness=stiffness, seed=args.seed, steps_per_output=steps_per_output,
     outputs=n_outputs, polygons_um=[np.asarray(p).tolist() for p in device.polygons]), indent=1) + "\n")
 cells_file = open(os.path.join(args.output, "cells.csv") if rank0 else os.devnull, "w", newline="")
@@ -273,7 +276,8 @@ def record():
 
 
 say(f"device {os.path.basename(args.layout)} x {args.scale:g} um: box {box[0]:g} x {box[1]:g} x {box[2]:g} um, "
-    f"height {H:g} um; inlet mean speed {args.speed:g} mm/s; haematocrit {args.haematocrit:g} at the inlet; "
+    f"height {H:g} um; inlet mean speed {args.speed:g} mm/s run {plan.speedup:.3g}x faster "
+    f"({to_mm_s(plan.speed):.3g} mm/s); haematocrit {args.haematocrit:g} at the inlet; "
     f"membranes {stiffness:.3g}x the paper's moduli; {to_ms(n_outputs * steps_per_output * system.time_step):g} ms "
     f"in {n_outputs} outputs")
 def picture(name):

@@ -101,7 +101,7 @@ class SamplesUnderMpirun(unittest.TestCase):
         their entries and exits (by outlet) bit for bit at 1 and 2 ranks."""
         layout = os.path.join(SOURCE, "samples", "data", "t_junction.svg")
         self.check_same_as_serial("device_from_mask.py", "--layout", layout, "--outlets", "x+", "y+", "--scale", "1.5",
-                                  "--speed", "35", "--duration", "0.3",
+                                  "--speed", "1.3", "--duration", "0.3",
                                   "--output-every", "50", "--haematocrit", "0.1", "--output", "tj", "--no-plots",
                                   csv_files=("tj/cells.csv", "tj/events.csv", "tj/scene.json"))
 

@@ -132,6 +132,17 @@ def _winding(points, nodes, triangles):
     return out
 
 
+def lb_gamma(n_nodes, surface, visc, dens):
+    """PyOIF's coupling friction per node for a mesh of n_nodes on a
+    membrane of this surface, in a fluid of this kinematic viscosity and
+    density (the engine's units): the drag of a 393-node sphere of surface
+    201.06 calibrated at visc 1.5 to 5.9, dens 1 to 6 (Jancigova, Tothova et
+    al.), scaled by node density (the same total friction per area)."""
+    return (393.0 / n_nodes) * np.sqrt(surface / 201.0619) * (
+        (5.6 - 1.82) / (5.853658537 - 1.5) * (visc - 1.5)
+        + (10 - 1.82) / (6 - 1.025) * (dens - 1.025) + 1.82)
+
+
 def _warn_overlaps(owner, system, pos, triangles, cell_id):
     """Warn (OverlapWarning) when nodes of a new cell lie inside an existing
     cell or that cell's nodes inside the new one, or the new cell's nodes
@@ -896,10 +907,7 @@ class OifCellType:
         scaled by node density."""
         visc = _real("suggest_LBgamma", "visc", visc, "pos")
         dens = _real("suggest_LBgamma", "dens", dens, "pos")
-        n = self.mesh.get_n_nodes()
-        gamma = (393.0 / n) * np.sqrt(self.surface0 / 201.0619) * (
-            (5.6 - 1.82) / (5.853658537 - 1.5) * (visc - 1.5)
-            + (10 - 1.82) / (6 - 1.025) * (dens - 1.025) + 1.82)
+        gamma = lb_gamma(self.mesh.get_n_nodes(), self.surface0, visc, dens)
         if not gamma > 0:
             # the formula is a linear fit; far below its calibration (visc 1.5, dens 1.025) it goes negative
             raise ValueError(f"suggest_LBgamma: visc={visc!r} and dens={dens!r} are outside the range of the "
