@@ -15,6 +15,9 @@ from lbmd import lb, lbboundaries, shapes
 from lbmd.open_boundaries import PressureOutlet, VelocityInlet
 
 L, W, H = 30.0, 12.0, 12.0
+#: the device scenes' contacts, times the advised (oif.set_contacts): at 1x a node
+#: passed a chamfer's corner in 1 of 12 runs (T-junction, seed 3)
+CONTACT_SCALE = 3.0
 
 
 def scene(seed, mode):
@@ -136,12 +139,12 @@ class FlowThrough(unittest.TestCase):
             self.assertTrue(any(np.all(centre >= np.array(lo) - 1e-9) and np.all(centre <= np.array(hi) + 1e-9)
                                 for lo, hi in inlets), centre)
 
-    def device_run(self, polygon, open_faces, outlets):
+    def device_run(self, polygon, open_faces, outlets, seed=2):
         """Cells (stiff spheres, radius 1.8) carried through a channel drawn
         as `polygon` (z 1..7; corners met head on chamfered: a sharp one
         pins a cell and crushes it, as in a real device) from a Poiseuille
         inlet on x- to pressure outlets on `open_faces`, for 6000 steps;
-        returns (mass flux out / in, CellFlow)."""
+        returns (mass flux out / in over the last 2000 steps, CellFlow)."""
         s = lbmd.System(box_l=[40.0, 30.0, 8.0])
         s.time_step = 0.1
         s.cell_system.skin = 0.3
@@ -158,14 +161,16 @@ class FlowThrough(unittest.TestCase):
         sphere = oif.OifCellType(*oif.mesh_files("sphere162"), system=s, resize=(1.8,) * 3, ks=0.5, kb=0.1,
                                  kal=0.5, kag=0.7, kv=0.9, normal=True)
         s.thermostat.set_lb(LB_fluid=lbf, gamma=sphere.suggest_LBgamma(visc=1.5, dens=1.0))
-        oif.set_contacts(s, sphere, particle_types=0, wall_types=10)
+        oif.set_contacts(s, sphere, particle_types=0, wall_types=10, scale=CONTACT_SCALE)
         flow = oif.CellFlow(s, sphere, inlet=([2.0, 11.0, 1.0], [9.0, 19.0, 7.0]), outlets=outlets, rate=0.05,
-                            boundaries=walls, seed=2)
-        for _ in range(60):
+                            boundaries=walls, seed=seed)
+        inflow = outflow = 0.0
+        for k in range(60):
             s.integrator.run(100)
             flow.update()
-        inflow = lbf.open_boundaries.mass_flux("x-")
-        outflow = -sum(lbf.open_boundaries.mass_flux(face) for face in open_faces)
+            if k >= 40:  # the fluxes of the last 20 outputs: a cell near a face makes each one wobble
+                inflow += lbf.open_boundaries.mass_flux("x-")
+                outflow -= sum(lbf.open_boundaries.mass_flux(face) for face in open_faces)
         self.assertTrue(np.all(np.isfinite(s.part.all().pos)))
         self.assertEqual(sum(flow.exit_counts()), len(flow.removed))
         print(f"{self.id()}: mass out / in {outflow / inflow:.4f}, cells in {len(flow.added)}, out by "
@@ -175,7 +180,8 @@ class FlowThrough(unittest.TestCase):
     def test_t_junction_cells_leave_by_both(self):
         """A T-junction: the main channel y 10..20 from x- to x+, a side
         branch x 16..26 up to y+ (whose opposite face y- is solid): mass in
-        = mass out within 1 %, cells leave by both outlets."""
+        = mass out within 1 %, cells leave by both outlets (seeds 1-6: all
+        ran, mass out / in 0.9968-0.9985, 2-4 cells by x+ and 11-13 by y+)."""
         balance, flow = self.device_run(
             [[0, 10], [40, 10], [40, 20], [29, 20], [26, 23], [26, 31], [16, 31], [16, 23], [13, 20], [0, 20]],
             ["x+", "y+"], [("x+", 36.0), ("y+", 26.0)])
@@ -186,7 +192,8 @@ class FlowThrough(unittest.TestCase):
         """A bifurcation: the inlet channel y 10..20 splits around an
         island (its apex chamfered) into branches y 2..10 and y 20..28 that
         both end on x+: two outlet regions on one face. Mass in = mass out
-        within 1 %, cells leave by both branches."""
+        within 1 %, cells leave by both branches (seeds 1-6: all ran, mass out
+        / in 0.9939-0.9971, 4-6 cells by each branch)."""
         balance, flow = self.device_run(
             [[0, 10], [12, 10], [18, 2], [40, 2], [40, 10], [27, 10], [24, 13], [24, 17], [27, 20], [40, 20],
              [40, 28], [18, 28], [12, 20], [0, 20]],
