@@ -6,7 +6,11 @@ as a fraction of a memory-bandwidth roofline measured on the spot.
 
     pyoif maintainer/benchmarks/lb_mlups.py [--threads 1 2] [--sizes 32 64 128 192]
         [--precision double single] [--repeats 10] [--periodic-only] [--seconds 2]
-        [--csv lb_mlups.csv]
+        [--csv lb_mlups.csv] [--watch-cost]
+
+The fluid's speed watch is off here (the kernel alone against the roofline);
+--watch-cost times instead its pass (LBFluid(speed_watch_every=...), default
+one per 100 updates) against an update.
 
 Precision: the populations stored as double or as float
 (LBFluid(single_precision=True)). Both fluids of a scene are built first
@@ -48,11 +52,12 @@ def bytes_per_node(precision):
     return 2 * 19 * BYTES_PER_VALUE[precision]
 
 
-def make_fluid(shape, threads, walls=None, precision="double"):
+def make_fluid(shape, threads, walls=None, precision="double", speed_watch_every=0):
     system = lbmd.System(box_l=list(shape))
     system.time_step = 0.1
     fluid = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, n_threads=threads,
-                       ext_force_density=[1e-5, 0, 0], single_precision=precision == "single")
+                       ext_force_density=[1e-5, 0, 0], single_precision=precision == "single",
+                       speed_watch_every=speed_watch_every)
     system.actors.add(fluid)
     if walls == "z":  # the paper's kind of channel (cell_cost.py's scene), fits in the L3 cache
         system.lbboundaries.add(lbboundaries.LBBoundary(shape=shapes.Wall(normal=[0, 0, 1], dist=1.0)))
@@ -98,6 +103,29 @@ def interleaved(fluids, seconds, repeats):
     return best
 
 
+def watch_cost(scenes, threads, args):
+    """The speed watch's pass (LBFluid(speed_watch_every=...)): each scene
+    timed with a pass after every update and with none, interleaved; its
+    cost as a share of an update, and at the default of one pass per 100."""
+    rows = []
+    print(f"{'scene':<34} {'precision':>9} {'ms/update':>10} {'+pass ms':>9} {'pass/update':>12} "
+          f"{'cost at 1/100':>13}")
+    for name, shape, walls in scenes:
+        for p in args.precision:
+            built = {every: make_fluid(shape, threads, walls, p, every) for every in (0, 1)}
+            best = interleaved({every: fluid for every, (_, fluid) in built.items()}, args.seconds,
+                               args.repeats)
+            share = (best[1] - best[0]) / best[0]
+            print(f"{name:<34} {p:>9} {best[0] * 1e3:>10.2f} {(best[1] - best[0]) * 1e3:>9.2f} {share:>12.2f} "
+                  f"{share / 100:>12.2%}")
+            rows.append(dict(threads=threads, scene=name, precision=p, ms_per_update=best[0] * 1e3,
+                             ms_per_watch_pass=(best[1] - best[0]) * 1e3, pass_per_update=share,
+                             cost_every_100=share / 100))
+            for system, _ in built.values():
+                system.actors.clear()
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
@@ -108,6 +136,8 @@ def main():
     ap.add_argument("--periodic-only", action="store_true", help="skip the walled channels")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--csv", default="lb_mlups.csv")
+    ap.add_argument("--watch-cost", action="store_true",
+                    help="instead: the fluid's speed watch, a pass every update against none, per scene")
     args = ap.parse_args()
     try:
         print(subprocess.run(["lscpu"], capture_output=True, text=True).stdout.split("\n")[7])
@@ -120,13 +150,16 @@ def main():
         print(f"\n{threads} thread(s): copy bandwidth {bw / 1e9:.2f} GB/s -> roofline "
               + ", ".join(f"{roof[p]:.1f} MLUPS in {p} ({bytes_per_node(p)} bytes/node)"
                           for p in args.precision))
-        print(f"{'scene':<34} {'precision':>9} {'fluid nodes':>12} {'ms/update':>10} {'MLUPS':>8} "
-              f"{'roofline':>9}")
         scenes = [(f"periodic {n}^3", (n, n, n), None) for n in args.sizes]
         if not args.periodic_only:
             scenes.append(("channel 256x64x64, 2 walls", (256, 64, 64), (1.0, 1.0)))
             scenes.append(("channel 100x40x20, walls normal to z", (100, 40, 20), "z"))
             scenes.append(("channel 128^3, 40 % solid", (128, 128, 128), (26.0, 25.0)))
+        if args.watch_cost:
+            rows += watch_cost(scenes, threads, args)
+            continue
+        print(f"{'scene':<34} {'precision':>9} {'fluid nodes':>12} {'ms/update':>10} {'MLUPS':>8} "
+              f"{'roofline':>9}")
         for name, shape, walls in scenes:
             built = {p: make_fluid(shape, threads, walls, p) for p in args.precision}
             fluids = {p: fluid for p, (_, fluid) in built.items()}
