@@ -95,7 +95,7 @@ class Repr(unittest.TestCase):
         system = lbmd.System(box_l=[30.0, 12.0, 12.0], time_step=0.1)
         ct = oif.OifCellType(*oif.mesh_files("sphere162"), system=system, resize=(2.0,) * 3, ks=0.05)
         flow = oif.CellFlow(system, ct, inlet=([0, 0, 0], [8, 12, 12]), outlet=25.0, rate=0.5, seed=1)
-        self.check(flow, "rate=0.5", "axis=0", "outlet=25.0", "0 cells")
+        self.check(flow, "rate=0.5", "inlets=[[[0.0, 0.0, 0.0], [8.0, 12.0, 12.0]]]", "outlets=[x+ at 25]", "0 cells")
 
 
 class Dir(unittest.TestCase):
