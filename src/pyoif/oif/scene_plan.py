@@ -61,9 +61,6 @@ TAU_STAR = 0.95
 MAX_SPEEDUP, MAX_REYNOLDS = 27.0, 0.5
 #: gamma dt / m: the node mass that gives it
 GAMMA_DT_PER_MASS = 0.3
-#: shape error against rbc2562 by mesh (doc/accuracy.md, "Cells")
-MESH_ERROR = {"rbc162": "4-5 %", "rbc374": "1.2-4.5 %", "rbc642": "0.5-1.3 %", "rbc1002": "0.2-1.4 %",
-              "rbc2562": "the reference"}
 
 
 class ScenePlan:
@@ -181,8 +178,11 @@ def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh="rbc
     visc, dens = _tidy(units.to_lattice(nu_si, "m^2/s")), _tidy(units.to_lattice(plasma_density, "kg/m^3"))
     from .oif_classes import lb_gamma
     gamma = float(lb_gamma(len(nodes), surface, visc, dens))
+    # the shape error against the finest mesh, from the table check_settings holds (doc/accuracy.md)
+    from .settings_check import MESH_ERROR
+    error = float(np.interp(len(nodes), [p[0] for p in MESH_ERROR], [p[1] for p in MESH_ERROR]))
     rows.append(("mesh", f"{mesh}", f"{len(nodes)} nodes, resize {size:.4g}",
-                 f"cell shapes within {MESH_ERROR.get(mesh, 'an unmeasured error')} of the finest mesh"))
+                 f"cell shapes within about {100 * error:.1f} % of the finest mesh"))
     rows.append(("coupling gamma", f"{gamma:.4g}", "PyOIF's calibrated friction for this mesh density "
                  "(suggest_LBgamma)", "the drag of the calibration's sphere; keep gamma N when changing the mesh"))
     time_step = _tidy(units.to_lattice(dt, "s"))
