@@ -736,6 +736,25 @@ def cell_type_radius_metres(sc):
     oif.OifCellType(*oif.mesh_files("rbc374"), system=sc.system, resize=(3.91e-6,) * 3, ks=0.005)
 
 
+@case("oif.scene_parameters(narrowest=12, ...): a channel width in um where metres are asked", ValueError,
+      "narrowest", "metres", "1.2e-05 m")
+def plan_narrowest_in_um(sc):
+    oif.scene_parameters(narrowest=12, mean_speed=1e-3)
+
+
+@case("oif.scene_parameters(..., accuracy=2): the error wanted in % where a fraction is asked", ValueError,
+      "accuracy", "fraction")
+def plan_accuracy_percent(sc):
+    oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, accuracy=2)
+
+
+@case("oif.scene_parameters(..., time_budget=10): a budget no accuracy fits", ValueError, "time_budget",
+      "coarser accuracy", "shorter duration")
+def plan_budget_too_small(sc):
+    oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, duration=0.1, box=[100e-6, 40e-6, 14e-6], cells=20,
+                         accuracy=0.05, time_budget=10)
+
+
 @case("seed_cells(..., haematocrit=1.5)", ValueError, "haematocrit", "(0, 1)", scene="cell")
 def seed_haematocrit(sc):
     oif.seed_cells(sc.system, sc.cell_type, haematocrit=1.5, seed=1)

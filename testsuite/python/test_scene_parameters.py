@@ -2,8 +2,9 @@
 paper's inputs give the samples' numbers; the rules (lattice spacing from
 the cell and the channel, relaxation time, speed-up held by the membrane
 limit and by the Reynolds number, friction, node mass) each hold; a scene
-built from the plan passes system.check_settings() with no warning; SI
-mistakes are named."""
+built from the plan passes system.check_settings() with no warning; the
+accuracy wanted picks the mesh and the time step, a time budget the finest
+accuracy that fits; SI mistakes are named."""
 import math
 import unittest
 
@@ -56,17 +57,82 @@ class SceneParameters(unittest.TestCase):
         self.assertAlmostEqual(3 * small.visc * small.tau / small.agrid ** 2 + 0.5, 0.95, delta=1e-9)
         self.assertLess(small.mach, 0.1)
 
+    def test_accuracy_picks_mesh_and_time_step(self):
+        """The accuracy wanted picks the coarsest mesh whose measured shape
+        error (check_settings' MESH_ERROR table) is within it, a lattice
+        update whose time-step error is, and a speed-up one cell of the plan
+        survives at the time step and 1.5x it (check_settings' trial)."""
+        from oif.settings_check import MESH_ERROR, TRIAL_MARGIN, membrane_trial
+        error = dict(MESH_ERROR)
+        coarse = oif.scene_parameters(narrowest=10e-6, mean_speed=1.3e-3, accuracy=0.05)
+        self.assertEqual(coarse.mesh, "rbc162")
+        self.assertLessEqual(coarse.shape_error, 0.05)
+        medium = oif.scene_parameters(narrowest=10e-6, mean_speed=1.3e-3, accuracy=0.02)
+        self.assertEqual(medium.mesh, "rbc642")  # rbc374's 4.5 % is too much
+        self.assertEqual(medium.shape_error, error[642])
+        for plan in (coarse, medium):
+            self.assertLessEqual(plan.time_error, plan.accuracy)
+            self.assertEqual(plan.time_step, 0.1)
+            s = lbmd.System(box_l=[40.0] * 3)
+            cell_type = oif.OifCellType(*oif.mesh_files(plan.mesh), system=s, resize=plan.resize, normal=True,
+                                        **plan.moduli)
+            for dt in (plan.time_step, TRIAL_MARGIN * plan.time_step):
+                self.assertEqual(membrane_trial(cell_type, dt, plan.node_mass, plan.gamma), "stable", plan)
+        self.assertEqual(coarse.speedup, 27.0)
+        self.assertLess(medium.speedup, 27.0)  # rbc642 at 27x fails the trial at 1.5x the time step
+        self.assertIn("lowered until one cell passes", str(medium))
+        # a finer time step: halved until its error (0.56 % at 0.1 us, as tau^1.4) is within
+        fine = oif.scene_parameters(narrowest=10e-6, mean_speed=1.3e-3, accuracy=0.002, mesh="rbc374")
+        self.assertEqual(fine.mesh, "rbc374")  # asked: kept
+        self.assertAlmostEqual(fine.time_step, 0.025, delta=1e-12)  # 0.05 us gives 0.21 %
+        self.assertAlmostEqual(fine.time_error, 0.0056 * 0.25 ** 1.4, delta=1e-12)
+        self.assertAlmostEqual(fine.node_mass, fine.gamma * 0.025 / 0.3, delta=1e-12)
+
+    def test_run_time_and_budget(self):
+        """The estimated run time is the measured costs times the work (lattice
+        node updates and cell node steps), and a time budget picks the finest
+        accuracy whose estimate fits, or says that none does."""
+        from oif.scene_plan import RANK_EFFICIENCY, SECONDS_PER_CELL_NODE_STEP, SECONDS_PER_NODE_UPDATE
+        work = dict(narrowest=10e-6, mean_speed=1.3e-3, duration=0.05, box=[100e-6, 40e-6, 16e-6], cells=20)
+        plan = oif.scene_parameters(**work)
+        self.assertEqual(plan.steps, round(0.05 / 27 / 1e-7))
+        one_core = plan.steps * (100 * 40 * 16 * SECONDS_PER_NODE_UPDATE + 20 * 374 * SECONDS_PER_CELL_NODE_STEP)
+        self.assertAlmostEqual(plan.estimated_seconds, one_core, delta=1e-9 * one_core)
+        two = oif.scene_parameters(cores=2, **work)
+        self.assertAlmostEqual(two.estimated_seconds, one_core / (1 + RANK_EFFICIENCY), delta=1e-9 * one_core)
+        self.assertIn("estimated run time", str(plan))
+        estimate = {a: oif.scene_parameters(accuracy=a, **work).estimated_seconds for a in (0.01, 0.02, 0.05)}
+        self.assertGreater(estimate[0.01], estimate[0.02])
+        self.assertGreater(estimate[0.02], estimate[0.05])
+        budget = 0.5 * (estimate[0.02] + estimate[0.01])
+        chosen = oif.scene_parameters(time_budget=budget, **work)
+        self.assertEqual((chosen.accuracy, chosen.mesh), (0.02, "rbc642"))
+        self.assertLessEqual(chosen.estimated_seconds, budget)
+        self.assertIn("time budget", str(chosen))
+        with self.assertRaisesRegex(ValueError, "time_budget.*coarser accuracy"):
+            oif.scene_parameters(time_budget=0.5 * estimate[0.05], **work)
+        with self.assertRaisesRegex(ValueError, "time_budget.*coarser accuracy"):  # accuracy asked: checked
+            oif.scene_parameters(time_budget=budget, accuracy=0.01, **work)
+
     def test_mistakes_named(self):
         with self.assertRaisesRegex(ValueError, "narrowest.*metres"):
             oif.scene_parameters(narrowest=12, mean_speed=1e-3)
         with self.assertRaisesRegex(ValueError, "does not pass a channel"):
             oif.scene_parameters(narrowest=4e-6, mean_speed=1e-3)
         with self.assertRaisesRegex(ValueError, "speedup"):
-            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, speedup=0.5)
+            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, speedup=0)
         with self.assertRaisesRegex(ValueError, "mean_speed"):
             oif.scene_parameters(narrowest=12e-6, mean_speed=-1.0)
         with self.assertRaises(TypeError):
             oif.scene_parameters(narrowest="12 um", mean_speed=1e-3)
+        with self.assertRaisesRegex(ValueError, "'accuracy' is the error wanted as a fraction"):
+            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, accuracy=2)
+        with self.assertRaisesRegex(ValueError, r"'box\[0\]' is 100: SI, in metres"):
+            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, duration=0.01, box=[100, 40, 16])
+        with self.assertRaisesRegex(ValueError, "'time_budget' needs the 'duration'"):
+            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, time_budget=3600)
+        with self.assertRaisesRegex(ValueError, "'cells' must be a whole number"):
+            oif.scene_parameters(narrowest=12e-6, mean_speed=1e-3, cells=2.5)
 
     def test_scene_from_the_plan_passes_the_checks(self):
         """A channel between walls with two red cells, every number from the

@@ -35,7 +35,21 @@ behind each):
 - coupling: PyOIF's calibrated friction for the mesh (suggest_LBgamma), the
   node mass from gamma dt / m = 0.3 (the friction relaxes a node's velocity
   within a few steps; heavier nodes folded at the flagship's island);
-- contacts: the advised hard_contact, stiffened with the membranes.
+- contacts: the advised hard_contact, stiffened with the membranes;
+- stability: one cell of the plan, alone, is run at the time step and at
+  1.5x it (check_settings' membrane trial); where it fails the speed-up is
+  lowered, and at S = 1 the time step is halved.
+
+The accuracy wanted (``accuracy``, a fraction: 0.05, 0.02, 0.01, ...) picks
+the coarsest mesh of the cell's family whose measured shape error is within
+it (rbc162 for 5 %, rbc642 for 2 %, rbc2562 below 1.3 %) and a lattice update
+short enough for the time-step error (0.56 % at 0.1 us, about as tau^1.4);
+the lattice spacing stays (the cells are not staircase walls; their drag
+comes from the coupling). With ``duration`` (s of real flow), ``box`` (m)
+and ``cells`` the plan estimates the run time on one core (and on
+``cores``) from the measured costs of doc/performance.md; a ``time_budget``
+(s) picks the finest accuracy of ACCURACY_LEVELS that fits it, and names
+what to change when none does.
 """
 import math
 
@@ -61,6 +75,20 @@ TAU_STAR = 0.95
 MAX_SPEEDUP, MAX_REYNOLDS = 27.0, 0.5
 #: gamma dt / m: the node mass that gives it
 GAMMA_DT_PER_MASS = 0.3
+#: the time-step error of cells in flow at a lattice update of 0.1 us (the
+#: stiffest membranes measured, ks 0.5) and its growth with tau
+#: (doc/accuracy.md, "Time step and lattice interval")
+TIME_ERROR_AT_0_1_US, TIME_ERROR_EXPONENT = 0.0056, 1.4
+#: the smallest relaxation time a halved lattice update may reach
+TAU_STAR_MIN = 0.55
+#: accuracies a time budget chooses between, finest first
+ACCURACY_LEVELS = (0.01, 0.02, 0.05)
+#: measured costs on one quiet core (doc/performance.md, the flagship's
+#: benchmark bifurcation_cost.py): a lattice node update of a walled scene
+#: (1.36 s per 1000 steps for its 140 800 nodes: 9.7 ns) and a cell per mesh
+#: node per step (36 us per rbc374 with its coupling, 40 RBCs); 0.9 of linear
+#: speed per rank (1.8x on 2). A busy or older machine takes 2-3x longer.
+SECONDS_PER_NODE_UPDATE, SECONDS_PER_CELL_NODE_STEP, RANK_EFFICIENCY = 10e-9, 40e-6 / 374, 0.9
 
 
 class ScenePlan:
@@ -85,6 +113,15 @@ class ScenePlan:
         rounded up to a whole number of lattice spacings."""
         return [math.ceil(self.length(v) / self.agrid - 1e-9) * self.agrid for v in lengths]
 
+    def slit_force(self, height):
+        """The body force density (engine units) that drives the plan's mean
+        speed between two plane walls `height` metres apart: plane Poiseuille
+        flow, U = f H^2 / (12 rho nu). Walls across the flow slow it (a duct
+        of square section reaches about 0.42 of it; measure and scale, as
+        the flagship's drive_flow does, where the speed matters)."""
+        h = self.length(_positive("height", height))
+        return 12.0 * self.dens * self.visc * self.speed / h ** 2
+
     def __str__(self):
         width = max(len(r[0]) for r in self.rows)
         lines = [f"{'setting':<{width}}  value           reason; expected error"]
@@ -100,36 +137,78 @@ def _positive(name, value):
         raise TypeError(f"scene_parameters: parameter '{name}' must be a number, got {value!r}")
     if not (math.isfinite(value) and value > 0):
         raise ValueError(f"scene_parameters: parameter '{name}' must be positive and finite, got {value!r}")
-    if name in ("narrowest", "cell_radius") and value > 1e-2:
+    if (name in ("narrowest", "cell_radius", "height") or name.startswith("box[")) and value > 1e-2:
         raise ValueError(f"scene_parameters: parameter '{name}' is {value:g}: SI, in metres, is expected "
-                         f"(a {name.replace('_', ' ')} of {value:g} um is {value * 1e-6:g} m)")
+                         f"(a length of {value:g} um is {value * 1e-6:g} m)")
     return float(value)
 
 
-def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh="rbc374", membrane=None,
+def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh=None, membrane=None,
                      membrane_viscosity=RBC_MEMBRANE_VISCOSITY, plasma_viscosity=1.5e-3, plasma_density=1000.0,
-                     speedup=None, units=None):
+                     speedup=None, accuracy=None, duration=None, box=None, cells=0, time_budget=None, cores=1,
+                     units=None):
     """The plan of a scene (ScenePlan) from SI inputs: `narrowest` the
     narrowest channel dimension (m), `mean_speed` the real mean flow speed
-    there (m/s), the cells' radius (m), shipped mesh and membrane moduli
-    (a dict of lbmd.units.oif_moduli_from_si's SI keywords; default the
-    PyOIF paper's red cell) and membrane viscosity (Pa s m), the plasma's
-    dynamic viscosity (Pa s) and density (kg/m^3); `speedup` None (chosen:
-    module docstring) or a factor >= 1; `units` a lbmd.units.UnitSystem
-    (default: um, us, 1e-15 kg)."""
+    there (m/s), the cells' radius (m), shipped mesh (default rbc374, or the
+    one `accuracy` picks) and membrane moduli (a dict of
+    lbmd.units.oif_moduli_from_si's SI keywords; default the PyOIF paper's
+    red cell) and membrane viscosity (Pa s m), the plasma's dynamic
+    viscosity (Pa s) and density (kg/m^3); `speedup` None (chosen: module
+    docstring) or a factor >= 1; `accuracy` the error wanted on the cells'
+    shapes (a fraction, e.g. 0.02); `duration` the real flow time to run
+    (s), `box` the box lengths (m) and `cells` the number of cells, for the
+    estimated run time on `cores` cores; `time_budget` (s) the longest run
+    wanted: the finest of ACCURACY_LEVELS that fits (or the `accuracy`
+    given, checked); `units` a lbmd.units.UnitSystem (default: um, us,
+    1e-15 kg)."""
+    if time_budget is not None:
+        time_budget = _positive("time_budget", time_budget)
+        if duration is None or box is None:
+            raise ValueError("scene_parameters: a 'time_budget' needs the 'duration' of real flow (s) and the "
+                             "'box' lengths (m) to estimate the run time")
+        asked = dict(narrowest=narrowest, mean_speed=mean_speed, cell_radius=cell_radius, mesh=mesh,
+                     membrane=membrane, membrane_viscosity=membrane_viscosity, plasma_viscosity=plasma_viscosity,
+                     plasma_density=plasma_density, speedup=speedup, duration=duration, box=box, cells=cells,
+                     cores=cores, units=units)
+        tried = []
+        for level in ((accuracy,) if accuracy is not None else ACCURACY_LEVELS):
+            plan = scene_parameters(accuracy=level, **asked)
+            tried.append(f"accuracy {level:g}: about {_hours(plan.estimated_seconds)}")
+            if plan.estimated_seconds <= time_budget:
+                plan.rows.append(("time budget", _hours(time_budget), f"the finest accuracy that fits of "
+                                  f"{', '.join(f'{a:g}' for a in ACCURACY_LEVELS)}" if accuracy is None else
+                                  "the accuracy asked fits", "; ".join(tried)))
+                plan.time_budget = time_budget
+                return plan
+        raise ValueError(f"scene_parameters: no plan fits the time_budget of {_hours(time_budget)} on {cores} "
+                         f"core(s) ({'; '.join(tried)}): ask a coarser accuracy, a shorter duration "
+                         f"({duration:g} s), a smaller box, fewer cells, or more cores")
     units = units or UnitSystem()
     narrowest = _positive("narrowest", narrowest)
     mean_speed = _positive("mean_speed", mean_speed)
     cell_radius = _positive("cell_radius", cell_radius)
     plasma_viscosity = _positive("plasma_viscosity", plasma_viscosity)
     plasma_density = _positive("plasma_density", plasma_density)
+    if accuracy is not None:
+        accuracy = _positive("accuracy", accuracy)
+        if accuracy >= 1:
+            raise ValueError(f"scene_parameters: parameter 'accuracy' is the error wanted as a fraction (0.02 "
+                             f"for 2 %), got {accuracy:g}")
     membrane = dict(RBC_MEMBRANE if membrane is None else membrane)
-    if speedup is not None and not (isinstance(speedup, (int, float)) and math.isfinite(speedup) and speedup >= 1):
-        raise ValueError(f"scene_parameters: parameter 'speedup' must be a number >= 1 (or None: chosen), "
-                         f"got {speedup!r}")
+    if speedup is not None and not (isinstance(speedup, (int, float)) and math.isfinite(speedup) and speedup > 0):
+        raise ValueError(f"scene_parameters: parameter 'speedup' must be a positive number (or None: chosen; "
+                         f"below 1 runs slower than real time with softer membranes), got {speedup!r}")
     if cell_radius * 2 > narrowest * 1.5:
         raise ValueError(f"scene_parameters: a cell {2e6 * cell_radius:g} um wide does not pass a channel "
                          f"{1e6 * narrowest:g} um wide (it could squeeze through one down to 2/3 of its width)")
+    if box is not None:
+        box = [_positive(f"box[{i}]", v) for i, v in enumerate(_lengths3(box))]
+    if duration is not None:
+        duration = _positive("duration", duration)
+    if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or cells < 0:
+        raise ValueError(f"scene_parameters: parameter 'cells' must be a whole number >= 0, got {cells!r}")
+    if isinstance(cores, bool) or not isinstance(cores, (int, np.integer)) or cores < 1:
+        raise ValueError(f"scene_parameters: parameter 'cores' must be a whole number >= 1, got {cores!r}")
     rows = []
     nu_si = plasma_viscosity / plasma_density  # m^2/s
     # lattice spacing
@@ -142,15 +221,37 @@ def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh="rbc
                  f"channel ({narrowest / dx:.3g})",
                  "Stokes drag of the cell within about 2 % (+2.1 % at 3 nodes, -1 to -1.7 % from 6); "
                  "Poiseuille flow within 0.2 % from 5 nodes across"))
-    # lattice update = time step
+    # lattice update = time step: tau* = TAU_STAR, halved for the accuracy asked
     dt = (TAU_STAR - 0.5) * dx ** 2 / (3.0 * nu_si)
-    rows.append(("lattice update tau = time step", f"{dt * 1e6:.4g} us",
-                 f"relaxation time tau* = 3 nu tau / agrid^2 + 1/2 = {TAU_STAR} (advised 0.55..3: walls "
-                 f"midway, stable to Mach 0.6); a time step shorter than tau buys nothing",
-                 "time step 0.1 us: shapes within about 1 % of a 4x shorter one"))
-    # speed-up and the membranes
-    height = narrowest
-    reynolds = mean_speed * height / nu_si
+    why_dt = (f"relaxation time tau* = 3 nu tau / agrid^2 + 1/2 = {TAU_STAR} (advised 0.55..3: walls midway, "
+              f"stable to Mach 0.6); a time step shorter than tau buys nothing")
+    if accuracy is not None:
+        while _time_error(dt) > accuracy and _tau_star(0.5 * dt, dx, nu_si) >= TAU_STAR_MIN:
+            dt *= 0.5
+            why_dt = (f"halved until the time-step error is within the accuracy asked ({accuracy:g}); "
+                      f"tau* {_tau_star(dt, dx, nu_si):.3g} (at least {TAU_STAR_MIN})")
+    # the mesh: asked, or the coarsest of the family within the accuracy
+    if mesh is None:
+        mesh, why_mesh = "rbc374", "the default (the paper's): flow extents within 0.4-1.6 %"
+        if accuracy is not None:
+            mesh, why_mesh = _mesh_for(accuracy, "rbc")
+    else:
+        why_mesh = "asked"
+        if not isinstance(mesh, str):
+            raise TypeError(f"scene_parameters: parameter 'mesh' must be a shipped mesh's name, got {mesh!r}")
+    nodes_file, triangles_file = _mesh_files(mesh)
+    data = mesh_io.read_mesh(nodes_file, triangles_file)
+    size = _tidy(units.to_lattice(cell_radius, "m"))
+    resize = (size, size, size)
+    nodes = np.asarray(data.nodes, dtype=float) * size  # the shipped meshes have radius 1: resize = radius
+    surface = float(geo.surface(nodes, np.asarray(data.triangles)))
+    visc, dens = _tidy(units.to_lattice(nu_si, "m^2/s")), _tidy(units.to_lattice(plasma_density, "kg/m^3"))
+    from .oif_classes import lb_gamma
+    gamma = float(lb_gamma(len(nodes), surface, visc, dens))
+    # speed-up: the largest the limits allow, lowered (then the time step
+    # halved) until one cell of the plan passes the membrane trial
+    reynolds = mean_speed * narrowest / nu_si
+    asked_speedup = speedup
     if speedup is None:
         speedup = max(1.0, min(MAX_SPEEDUP, MAX_REYNOLDS / reynolds))
         why = (f"min({MAX_SPEEDUP:g}: the stiffest membranes the samples held at this time step, "
@@ -158,35 +259,41 @@ def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh="rbc
     else:
         speedup = float(speedup)
         why = "asked"
+    while True:
+        moduli = oif_moduli_from_si(units, **{k: speedup * v for k, v in membrane.items()},
+                                    membrane_viscosity=membrane_viscosity)
+        time_step = _tidy(units.to_lattice(dt, "s"))
+        node_mass = gamma * time_step / GAMMA_DT_PER_MASS
+        trial = _membrane_trial(nodes_file, triangles_file, resize, moduli, time_step, node_mass, gamma)
+        if trial == "stable":
+            break
+        if asked_speedup is None and speedup > 1.0:  # (an asked one is kept: the time step gives way)
+            speedup = max(1.0, speedup / 1.5)
+            why = (f"lowered until one cell passes the membrane trial at this time step and 1.5x it "
+                   f"(at the higher speed-up: {trial})")
+        elif _tau_star(0.5 * dt, dx, nu_si) >= TAU_STAR_MIN:
+            dt *= 0.5
+            why_dt = (f"halved until one cell at these moduli passes the membrane trial ({trial}); tau* "
+                      f"{_tau_star(dt, dx, nu_si):.3g}")
+        else:
+            raise ValueError(f"scene_parameters: one {mesh} cell at these moduli (x{speedup:g}) fails the "
+                             f"membrane trial even at the shortest lattice update ({trial}): ask a coarser mesh "
+                             f"or softer membranes")
+    rows.append(("lattice update tau = time step", f"{dt * 1e6:.4g} us", why_dt,
+                 f"cells' time-step error about {100 * _time_error(dt):.2g} % (0.56 % at 0.1 us, as tau^1.4)"))
     rows.append(("speed-up S (membranes S x stiffer)", f"{speedup:.3g}", why,
                  f"the capillary number, so the cells' deformation, as at the real speed; Re {reynolds:.3g} -> "
                  f"{reynolds * speedup:.3g}"))
-    moduli = oif_moduli_from_si(units, **{k: speedup * v for k, v in membrane.items()},
-                                membrane_viscosity=membrane_viscosity)
     shear = membrane.get("shear_modulus")
     capillary = plasma_viscosity * mean_speed / shear if shear else float("nan")
     rows.append(("membrane coefficients", ", ".join(f"{k} {v:.4g}" for k, v in moduli.items()),
-                 f"the moduli x S (oif_moduli_from_si); the membrane viscosity unscaled (it is relative to the "
-                 f"plasma's, which stays)", f"Ca = eta U / mu0 = {capillary:.3g} at either speed"))
-    # the mesh and its friction
-    nodes_file, triangles_file = _mesh_files(mesh)
-    data = mesh_io.read_mesh(nodes_file, triangles_file)
-    size = _tidy(units.to_lattice(cell_radius, "m"))
-    nodes = np.asarray(data.nodes, dtype=float) * size  # the shipped meshes have radius 1: resize = radius
-    resize = (size, size, size)
-    surface = float(geo.surface(nodes, np.asarray(data.triangles)))
-    visc, dens = _tidy(units.to_lattice(nu_si, "m^2/s")), _tidy(units.to_lattice(plasma_density, "kg/m^3"))
-    from .oif_classes import lb_gamma
-    gamma = float(lb_gamma(len(nodes), surface, visc, dens))
-    # the shape error against the finest mesh, from the table check_settings holds (doc/accuracy.md)
-    from .settings_check import MESH_ERROR
-    error = float(np.interp(len(nodes), [p[0] for p in MESH_ERROR], [p[1] for p in MESH_ERROR]))
-    rows.append(("mesh", f"{mesh}", f"{len(nodes)} nodes, resize {size:.4g}",
+                 "the moduli x S (oif_moduli_from_si); the membrane viscosity unscaled (it is relative to the "
+                 "plasma's, which stays)", f"Ca = eta U / mu0 = {capillary:.3g} at either speed"))
+    error = _mesh_error(len(nodes))
+    rows.append(("mesh", f"{mesh}", f"{len(nodes)} nodes, resize {size:.4g}; {why_mesh}",
                  f"cell shapes within about {100 * error:.1f} % of the finest mesh"))
     rows.append(("coupling gamma", f"{gamma:.4g}", "PyOIF's calibrated friction for this mesh density "
                  "(suggest_LBgamma)", "the drag of the calibration's sphere; keep gamma N when changing the mesh"))
-    time_step = _tidy(units.to_lattice(dt, "s"))
-    node_mass = gamma * time_step / GAMMA_DT_PER_MASS
     rows.append(("node mass", f"{node_mass:.4g}", f"gamma dt / m = {GAMMA_DT_PER_MASS}: the friction relaxes a "
                  "node's velocity within a few steps", "heavier nodes folded membranes at the flagship's island"))
     rows.append(("contacts", f"scale {speedup:.3g}", "oif.set_contacts(..., scale=S): the advised hard_contact "
@@ -194,12 +301,89 @@ def scene_parameters(narrowest, mean_speed, *, cell_radius=RBC_RADIUS, mesh="rbc
                  "the run with contact_overrun"))
     speed = units.to_lattice(mean_speed * speedup, "m/s")
     mach = speed * 2.0 * time_step / units.to_lattice(dx, "m") * math.sqrt(3.0)  # the peak about twice the mean
-    rows.append(("mean speed in the scene", f"{speed:.4g}", f"{mean_speed * 1e3:g} mm/s x S",
+    rows.append(("mean speed in the scene", f"{speed:.4g}", f"{mean_speed * 1e3:.3g} mm/s x S",
                  f"Mach about {mach:.3g} at the peak (advised <= 0.1)"))
+    if accuracy is not None:
+        rows.append(("accuracy asked", f"{100 * accuracy:g} %", "the mesh and the lattice update above",
+                     f"shapes {100 * error:.1f} %, time step {100 * _time_error(dt):.2g} %; the fluid's drag "
+                     f"about 2 % at this spacing"))
+    steps = estimated = None
+    if duration is not None:
+        steps = int(math.ceil(duration / speedup / dt - 1e-9))
+        rows.append(("steps", f"{steps}", f"{duration * 1e3:g} ms of real flow / S / time step",
+                     f"{duration / speedup * 1e3:.4g} ms in the scene"))
+        if box is not None:
+            node_count = float(np.prod([math.ceil(v / dx - 1e-9) for v in box]))
+            one_core = steps * (node_count * SECONDS_PER_NODE_UPDATE + cells * len(nodes) * SECONDS_PER_CELL_NODE_STEP)
+            estimated = one_core / (1.0 + RANK_EFFICIENCY * (cores - 1))
+            rows.append(("estimated run time", _hours(estimated), f"{node_count:.3g} lattice nodes and {cells} "
+                         f"cells of {len(nodes)} nodes, {steps} steps on {cores} core(s), at the costs measured in "
+                         "doc/performance.md (a quiet core)", "a busy or older machine takes 2-3x longer"))
     return ScenePlan(units=units, agrid=_tidy(units.to_lattice(dx, "m")), tau=time_step, time_step=time_step,
                      dens=dens, visc=visc, speed=speed, speedup=speedup, moduli=moduli, mesh=mesh, resize=resize,
                      gamma=gamma, node_mass=node_mass, contact_scale=speedup, reynolds=reynolds * speedup,
-                     capillary=capillary, mach=mach, rows=rows)
+                     capillary=capillary, mach=mach, accuracy=accuracy, shape_error=error,
+                     time_error=_time_error(dt), steps=steps, estimated_seconds=estimated, time_budget=None,
+                     rows=rows)
+
+
+def _time_error(dt):
+    """The cells' time-step error at a lattice update dt (s)."""
+    return TIME_ERROR_AT_0_1_US * (dt / 1e-7) ** TIME_ERROR_EXPONENT
+
+
+def _tau_star(dt, dx, nu):
+    return 3.0 * nu * dt / dx ** 2 + 0.5
+
+
+def _mesh_error(node_count):
+    from .settings_check import MESH_ERROR  # the table check_settings holds (doc/accuracy.md)
+    return float(np.interp(node_count, [p[0] for p in MESH_ERROR], [p[1] for p in MESH_ERROR]))
+
+
+def _mesh_for(accuracy, family):
+    """The coarsest shipped mesh of the family within the accuracy (or the finest)."""
+    from . import available_meshes
+    sizes = sorted(int(name[len(family):]) for name in available_meshes()
+                   if name.startswith(family) and name[len(family):].isdigit())
+    for n in sizes:
+        if _mesh_error(n) <= accuracy:
+            return f"{family}{n}", f"the coarsest mesh whose shape error is within the accuracy asked ({accuracy:g})"
+    return f"{family}{sizes[-1]}", f"the finest mesh (none is measured within {accuracy:g})"
+
+
+def _membrane_trial(nodes_file, triangles_file, resize, moduli, time_step, node_mass, gamma):
+    """check_settings' trial of one cell alone at the time step and at
+    TRIAL_MARGIN x it: 'stable' or how it failed."""
+    import lbmd
+    from .oif_classes import OifCellType
+    from .settings_check import TRIAL_MARGIN, membrane_trial
+    scratch = lbmd.System(box_l=[100.0] * 3)
+    cell_type = OifCellType(nodes_file, triangles_file, system=scratch, resize=resize, normal=True, **moduli)
+    outcome = membrane_trial(cell_type, time_step, node_mass, gamma)
+    if outcome == "stable":
+        outcome = membrane_trial(cell_type, TRIAL_MARGIN * time_step, node_mass, gamma)
+        if outcome != "stable":
+            outcome = f"at {TRIAL_MARGIN:g}x the time step: {outcome}"
+    return outcome
+
+
+def _lengths3(box):
+    try:
+        values = [v for v in box]
+    except TypeError:
+        raise TypeError(f"scene_parameters: parameter 'box' must be three lengths in metres, got {box!r}") from None
+    if len(values) != 3:
+        raise ValueError(f"scene_parameters: parameter 'box' must be three lengths in metres, got {box!r}")
+    return values
+
+
+def _hours(seconds):
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
 
 
 def _tidy(value):
