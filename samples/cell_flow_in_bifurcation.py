@@ -86,13 +86,13 @@ import numpy as np
 import lbmd
 import oif
 from lbmd import file_output, lb, lbboundaries, shapes
-from lbmd.units import UnitSystem, oif_moduli_from_si
+from lbmd.units import UnitSystem
 
 UNITS = UnitSystem()  # the paper's: length 1 um, time 1 us, mass 1e-15 kg
 
-# --- the paper's physical parameters (SI)
-AGRID = 1e-6                          # m, lattice spacing
-TIME_STEP = 1e-7                      # s, MD time step = lattice update interval
+# --- the paper's physical parameters (SI); the lattice spacing (1 um), the
+# time step (0.1 us), the coupling friction and the node mass follow from
+# them by oif.scene_parameters (printed at the start with its reasons)
 PLASMA_DENSITY = 1000.0               # kg/m^3
 PLASMA_VISCOSITY = 1.5e-3             # Pa s
 RBC_RADIUS = 3.91e-6                  # m
@@ -248,9 +248,21 @@ if args.height is not None and args.height < 10:
     raise SystemExit(f"--height {args.height} um: the channel must be at least 10 um high for RBCs of "
                      f"radius {RBC_RADIUS * 1e6} um")
 
+# --- the numbers from the SI inputs: the narrowest channel (a branch or the
+# height), the paper's flow (its centre-line speed, the mean about 2/3 of
+# it) run `stiffness` times faster, the RBC's membrane
+duration = args.duration * 1e-3 if args.duration is not None else size["duration"]
+plan = oif.scene_parameters(narrowest=min(min(CASES[args.case]), height), mean_speed=PAPER_SPEED / 1.5,
+                            speedup=stiffness, cell_radius=RBC_RADIUS, mesh="rbc374", membrane=RBC_MEMBRANE,
+                            membrane_viscosity=MEMBRANE_VISCOSITY, plasma_viscosity=PLASMA_VISCOSITY,
+                            plasma_density=PLASMA_DENSITY, duration=duration * stiffness,
+                            box=[CHANNEL_LENGTH, BOX_WIDTH, height + 2e-6], cells=n_rbc + int(rare), units=UNITS)
+if lbmd.rank == 0 and resumed is None:
+    print(plan)
+
 # --- everything below in the engine's units (um, us, 1e-15 kg)
 L = lambda v: UNITS.to_lattice(v, "m")  # noqa: E731 (a length)
-tau, agrid = UNITS.to_lattice(TIME_STEP, "s"), L(AGRID)
+tau, agrid = plan.tau, plan.agrid
 time_step = tau / (args.substeps or 1)  # MD steps per lattice update
 H = L(height)
 L_X, L_Y, H_BOX = L(CHANNEL_LENGTH), L(BOX_WIDTH), H + 2.0  # a wall one node thick below and above
@@ -309,9 +321,8 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
         n_stiff = int(round(args.stiff_fraction * n_rbc))
 
     # --- fluid, driven to the centre-line speed
-    visc = UNITS.to_lattice(PLASMA_VISCOSITY / PLASMA_DENSITY, "m^2/s")
-    dens = UNITS.to_lattice(PLASMA_DENSITY, "kg/m^3")
-    lbf = lb.LBFluid(agrid=agrid, dens=dens, visc=visc, tau=tau, ext_force_density=[0.0, 0.0, 0.0])
+    visc, dens = plan.visc, plan.dens
+    lbf = lb.LBFluid(**plan.fluid, ext_force_density=[0.0, 0.0, 0.0])
     system.actors.add(lbf)
     for b in boundaries:
         system.lbboundaries.add(lbboundaries.LBBoundary(shape=b))
@@ -371,8 +382,7 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
     flow_share = lower_flow_share() if math.isfinite(reached) else float("nan")
 
     # --- cells
-    rbc_moduli = oif_moduli_from_si(UNITS, **{k: stiffness * v for k, v in RBC_MEMBRANE.items()},
-                                    membrane_viscosity=MEMBRANE_VISCOSITY)
+    rbc_moduli = plan.moduli  # the paper's RBC x stiffness (oif_moduli_from_si)
     rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(L(RBC_RADIUS),) * 3, normal=True,
                           **rbc_moduli)
     types, counts, ptypes = [rbc], [n_rbc - n_stiff], [0]
@@ -406,15 +416,16 @@ if resumed is None:  # the scene made anew (else: as the checkpoint holds it)
     if n_rbc > 40:  # the paper's 60 do not fit there at random: the branches too (not counted as entries)
         region = ([0.0, 0.0, 1.0], [L_X, L_Y, H + 1.0])
         seeding_boundaries = boundaries
-    # the coupling's friction per node, and the node mass at gamma dt / m = 0.3:
-    # the friction relaxes a node's velocity to the fluid's within a few steps.
+    # the coupling's friction per node (suggest_LBgamma), and the node mass at
+    # gamma dt / m = 0.3 (the plan's, per MD step with --substeps): the
+    # friction relaxes a node's velocity to the fluid's within a few steps.
     # With heavier nodes (gamma dt / m 0.04-0.18; mass 1 here gives 0.15) the
     # membranes of cells jammed at the island's apex folded through
     # themselves within a few ms at every stiffness tried, as the RBC in shear
     # flow did (doc/validation.md); the physical mass of a node, 27 pg / 374 =
     # 0.07 in these units, is lighter still and needs no other change
-    gamma = rbc.suggest_LBgamma(visc=visc, dens=dens)
-    node_mass = gamma * time_step / 0.3
+    gamma = plan.gamma
+    node_mass = plan.node_mass * time_step / plan.time_step
     seeding = dict(counts=counts, boundaries=seeding_boundaries, region=region, particle_types=ptypes,
                    seed=args.seed, particle_mass=node_mass)
     if getattr(args, "haematocrit", None) is not None:  # dense: packed (doc/oif.md, "Packing")
@@ -452,7 +463,6 @@ else:
 # --- output schedule
 steps_per_output = args.steps or max(1, int(round(UNITS.to_lattice(
     (args.output_every * 1e-6 if args.output_every else size["output_every"]), "s") / time_step)))
-duration = args.duration * 1e-3 if args.duration is not None else size["duration"]
 n_outputs = args.cycles if args.cycles is not None else max(1, int(round(
     UNITS.to_lattice(duration, "s") / time_step / steps_per_output)))
 total_steps = n_outputs * steps_per_output

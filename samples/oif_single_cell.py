@@ -6,9 +6,14 @@ walls, driven by a body force), with VTK output for ParaView.
 
 Writes <output>/wall_bottom.vtk, wall_top.vtk, cell_<i>.vtk (the membrane
 with per-node velocity and force) and fluid_<i>.vtk (if the fluid can write
-VTK), and prints the cell's centre, velocity, volume and surface. Units: the
-PyOIF paper's lattice units (1 um, 1 us, 1e-15 kg): agrid 1 um, time step
-0.1 us, water-like fluid, RBC radius 3.91 um, the paper's moduli.
+VTK), and prints the cell's centre, velocity, volume and surface.
+
+Every number comes from SI inputs through oif.scene_parameters (printed at
+the start with its reasons): a channel 18 um high, plasma at a real mean
+speed of 1 mm/s, the PyOIF paper's red cell (radius 3.91 um). The plan runs
+the flow 27 times faster with the membranes 27 times stiffer (the same
+capillary number); the engine's units are the paper's (1 um, 1 us, 1e-15 kg):
+agrid 1 um, time step 0.1 us.
 """
 import argparse
 import os
@@ -28,24 +33,25 @@ parser.add_argument("--mesh", default="rbc374", help="shipped mesh name (see oif
 args = parser.parse_args()
 os.makedirs(args.output, exist_ok=True)
 
-box = (40.0, 20.0, 20.0)       # channel: periodic in x and y, walls at z = 1 and z = 19
+HEIGHT = 18e-6  # m, between the walls
+plan = oif.scene_parameters(narrowest=HEIGHT, mean_speed=1e-3, mesh=args.mesh)
+print(plan)
+box = plan.box([40e-6, 20e-6, HEIGHT + 2e-6])  # channel: periodic in x and y, walls at z = 1 and z = 19
 system = lbmd.System(box_l=box)
-system.time_step = 0.1
+system.time_step = plan.time_step
 system.cell_system.skin = 0.2
 
-# cell type: Evans-Fung RBC of radius 3.91, the paper's elastic moduli
-rbc = oif.OifCellType(*oif.mesh_files(args.mesh), system=system, resize=(3.91, 3.91, 3.91),
-                      ks=0.005, kb=0.02, kal=0.007, kag=0.7, kv=0.9, normal=True)
-cell = oif.OifCell(cell_type=rbc, particle_type=0, origin=[10.0, 10.0, 8.0], rotate=(np.pi / 2, 0.0, 0.0))
+# cell type: the Evans-Fung RBC, the paper's moduli times the plan's speed-up
+rbc = oif.OifCellType(*oif.mesh_files(plan.mesh), system=system, resize=plan.resize, normal=True, **plan.moduli)
+cell = oif.OifCell(cell_type=rbc, particle_type=0, origin=[10.0, 10.0, 8.0], rotate=(np.pi / 2, 0.0, 0.0),
+                   particle_mass=plan.node_mass)
 rbc.print_info()
 cell.print_info()
 
-# fluid: density 1, kinematic viscosity 1.5, body force giving ~1 mm/s at the centre
-lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[2.5e-4, 0.0, 0.0])
+# fluid: plasma, driven by the body force of the plan's mean speed between the walls
+lbf = lb.LBFluid(**plan.fluid, ext_force_density=[plan.slit_force(HEIGHT), 0.0, 0.0])
 system.actors.add(lbf)
-gamma = rbc.suggest_LBgamma(visc=1.5, dens=1.0)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=gamma)
-print(f"fluid-node friction gamma = {gamma:.4f} (suggest_LBgamma)")
+system.thermostat.set_lb(LB_fluid=lbf, gamma=plan.gamma)
 
 # walls: the same shapes are fluid boundaries and particle constraints
 walls = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(box[2] - 1.0))]
@@ -57,7 +63,7 @@ for name, z in (("bottom", 0.0), ("top", box[2] - 1.0)):
     slab = SimpleNamespace(corner=[0.0, 0.0, z], a=[box[0], 0, 0], b=[0, box[1], 0], c=[0, 0, 1.0])
     oif.output_vtk_rhomboid(slab, os.path.join(args.output, f"wall_{name}.vtk"))
 # node-wall contact: the advised hard_contact (diverges as the gap closes)
-oif.set_contacts(system, rbc, particle_types=0, wall_types=10)
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=plan.contact_scale)
 
 print("cycle  time     centre                 velocity_x   volume     surface")
 for i in range(args.cycles + 1):

@@ -9,6 +9,11 @@ different cells through their cell ids (mol_id), so many cells need no
 type each. Output: <output>/cell0_<i>.vtk, cell1_<i>.vtk, walls and the
 obstacle as VTK, and per cycle the cells' centres, the smallest node distance
 between them, and their volumes.
+
+Every number comes from SI inputs through oif.scene_parameters (printed at
+the start with its reasons): a channel 14 um high, plasma at a real mean
+speed of 1 mm/s, the PyOIF paper's red cell, run 27 times faster with the
+membranes 27 times stiffer (the same capillary number).
 """
 import argparse
 import os
@@ -27,19 +32,24 @@ parser.add_argument("--steps", type=int, default=200, help="MD steps per cycle")
 args = parser.parse_args()
 os.makedirs(args.output, exist_ok=True)
 
-box = (48.0, 24.0, 16.0)
+HEIGHT = 14e-6  # m, between the walls
+plan = oif.scene_parameters(narrowest=HEIGHT, mean_speed=1e-3)
+print(plan)
+box = plan.box([48e-6, 24e-6, HEIGHT + 2e-6])
 system = lbmd.System(box_l=box)
-system.time_step = 0.1
+system.time_step = plan.time_step
 system.cell_system.skin = 0.3
 
-rbc = oif.OifCellType(*oif.mesh_files("rbc374"), system=system, resize=(3.0, 3.0, 3.0),
-                      ks=0.02, kb=0.02, kal=0.02, kag=0.7, kv=0.9, normal=True)
-cells = [oif.OifCell(cell_type=rbc, particle_type=0, origin=[8.0, 10.0, 8.0], rotate=(np.pi / 2, 0.0, 0.0)),
-         oif.OifCell(cell_type=rbc, particle_type=0, origin=[14.0, 14.5, 8.0], rotate=(np.pi / 2, 0.0, 0.3))]
+rbc = oif.OifCellType(*oif.mesh_files(plan.mesh), system=system, resize=plan.resize, normal=True, **plan.moduli)
+starts = (([8.0, 9.0, 8.0], (np.pi / 2, 0.0, 0.0)), ([16.0, 14.5, 8.0], (np.pi / 2, 0.0, 0.3)))  # origin, rotation
+cells = [oif.OifCell(cell_type=rbc, particle_type=0, origin=origin, rotate=rotate, particle_mass=plan.node_mass)
+         for origin, rotate in starts]
 
-lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[5e-4, 0.0, 0.0])
+# plasma driven by the body force of the plan's mean speed between the walls
+# (the obstacle slows it a little)
+lbf = lb.LBFluid(**plan.fluid, ext_force_density=[plan.slit_force(HEIGHT), 0.0, 0.0])
 system.actors.add(lbf)
-system.thermostat.set_lb(LB_fluid=lbf, gamma=rbc.suggest_LBgamma(visc=1.5, dens=1.0))
+system.thermostat.set_lb(LB_fluid=lbf, gamma=plan.gamma)
 
 walls = [shapes.Wall(normal=[0, 0, 1], dist=1.0), shapes.Wall(normal=[0, 0, -1], dist=-(box[2] - 1.0))]
 boundaries = list(walls)
@@ -57,7 +67,7 @@ for name, z in (("bottom", 0.0), ("top", box[2] - 1.0)):
 
 # contacts: the advised hard_contact between the cells and with the walls
 # (a repulsion that diverges as the gap closes: doc/interactions.md)
-oif.set_contacts(system, rbc, particle_types=0, wall_types=10)
+oif.set_contacts(system, rbc, particle_types=0, wall_types=10, scale=plan.contact_scale)
 
 print("cycle   time    centre0 x,y,z          centre1 x,y,z         min distance  volumes")
 for i in range(args.cycles + 1):
