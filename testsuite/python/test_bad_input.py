@@ -524,14 +524,14 @@ def lb_threads(sc):
     fluid(n_threads=100000)
 
 
-@case("a coupled particle outside a non-periodic box (z = 7.5 in a box of 6)", lbmd.SimulationInstability,
+@case("a coupled particle moved outside a non-periodic box (z = 7.5 in a box of 6)", lbmd.SimulationInstability,
       "particle 0", "non-periodic axis 2", "left the box")
 def lb_particle_outside_box(sc):
     s = lbmd.System(box_l=[6, 6, 6], periodicity=[True, True, False])
     s.time_step = 0.1
     lbf = fluid()
     s.actors.add(lbf)
-    s.part.add(pos=[3, 3, 7.5])
+    s.part.add(pos=[3, 3, 3]).pos = [3, 3, 7.5]  # (part.add refuses it; a moved particle is caught by the run)
     s.thermostat.set_lb(LB_fluid=lbf, gamma=1.0)
     s.integrator.run(2)
 
@@ -614,6 +614,27 @@ def cell_wider_than_box(sc):
 def cell_overlaps_cell(sc):
     c = oif.OifCell(cell_type=sc.cell_type, particle_type=1, origin=[9.0, 8.0, 8.0])
     c.mesh._parts.remove()  # the warning is the check; take the cell away again
+
+
+@case("two cells placed at one origin (every node on the other's surface)", oif.OverlapWarning,
+      "overlaps cell 0", scene="cell")
+def cells_at_one_origin(sc):
+    c = oif.OifCell(cell_type=sc.cell_type, particle_type=0, origin=[8.0, 8.0, 8.0])
+    c.mesh._parts.remove()  # the warning is the check; take the cell away again
+
+
+@case("part.add(pos=...) outside the box along an axis that is not periodic", ValueError, "pos",
+      "outside the box", "not periodic")
+def particle_outside_closed_box(sc):
+    lbmd.System(box_l=[8.0] * 3, periodicity=[True, True, False]).part.add(pos=[1.0, 1.0, 9.5])
+
+
+@case("actors.remove(lbf) while the thermostat couples the particles to it", SettingsWarning, "actors.remove",
+      "no longer carried", "set_lb", scene="fluid_cell")
+def fluid_removed_under_coupling(sc):
+    sc.system.actors.remove(sc.lbf)
+    sc.system.actors.add(sc.lbf)  # as it was, for the checks after the entry
+    sc.system.thermostat.set_lb(LB_fluid=sc.lbf, gamma=1.0)
 
 
 def cell_through(sc, walls, wall):
@@ -788,18 +809,13 @@ def cell_change_box(sc):
     sc.system.box_l = [3.5, 3.5, 3.5]
 
 
-@case("system.periodicity = [True, True, True] with a cell wider than the box along a non-periodic z",
-      ValueError, "periodicity", "cell 0", "own periodic image")
-def cell_change_periodicity(sc):
+@case("OifCell wider than a non-periodic box along z (ESPResSo 4.1's OIF test builds one)",
+      ValueError, "the cell spans z", "not periodic", "wider than the box", "porting.md")
+def cell_wider_than_closed_box(sc):
+    # (ESPResSo 4.1's test: a box 10 long in a non-periodic z, a cell 13 wide)
     s = lbmd.System(box_l=[12, 12, 3], periodicity=[True, True, False])
-    s.time_step = 0.1
     ct = oif.OifCellType(*SPHERE, system=s, resize=(2.0,) * 3, ks=0.01)
-    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[6, 6, 1.5])
-    try:
-        s.periodicity = [True, True, True]
-    finally:
-        assert list(s.periodicity) == [True, True, False], "the refused periodicity was applied"
-        del cell
+    oif.OifCell(cell_type=ct, particle_type=0, origin=[6, 6, 1.5])
 
 
 # --- mesh files ----------------------------------------------------------------

@@ -214,7 +214,8 @@ class Coupling(unittest.TestCase):
                 shape=lbmd.shapes.Wall(normal=normal, dist=dist)))
         system.part.add(pos=[[2.0, 2.0, 3.0], [4.0, 4.0, 4.0]])
         system.integrator.run(3)
-        p = system.part.add(pos=[3.0, 3.0, 12.7], v=[0.01, 0, 0])
+        p = system.part.add(pos=[3.0, 3.0, 4.0], v=[0.01, 0, 0])  # (add refuses a position outside)
+        p.pos = [3.0, 3.0, 12.7]
         with self.assertRaisesRegex(lbmd.SimulationInstability,
                                     r"particle 2 at 12.7 along the non-periodic axis 2 left the box"):
             system.integrator.run(1)

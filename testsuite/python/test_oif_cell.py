@@ -373,7 +373,8 @@ class TestOifCell(unittest.TestCase):
     def test_periodic_extent_rule(self):
         """A cell as wide as a periodic box overlaps its own image, and edges
         of a quarter box would be cut by nearest-image bonds: refused. A cell
-        between half and a whole box length is fine (its volume exact)."""
+        between half and a whole box length is fine (its volume exact). Along
+        an axis that is not periodic the cell must lie inside the box."""
         big = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(16.0, 16.0, 16.0))
         with self.assertRaisesRegex(ValueError, r"spans 32(\.0*)? along y, not less than the periodic box "
                                                 r"length 30.*own periodic image"):
@@ -394,8 +395,18 @@ class TestOifCell(unittest.TestCase):
         half = oif.OifCellType(*oif.mesh_files("sphere162"), system=self.system, resize=(8.0, 8.0, 8.0))
         cell = oif.OifCell(cell_type=half, particle_type=0, origin=[20, 29, 15])  # 16 wide, across y = 30
         self.assertAlmostEqual(cell.volume(), half.volume0, places=9)
+        # along an axis that is not periodic there is no image, and no room
+        # either: a cell wider than the box is refused, saying how to port it
+        # (ESPResSo 4.1's OIF test builds one; doc/porting.md)
+        cell.mesh._parts.remove()
         self.system.periodicity = [True, False, False]
-        oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
+        with self.assertRaisesRegex(ValueError, r"spans y = -1\.*0*\.\.31.*not periodic.*make box_l\[1\] at "
+                                                r"least 32.*porting\.md"):
+            oif.OifCell(cell_type=big, particle_type=0, origin=[20, 15, 15])
+        with self.assertRaisesRegex(ValueError, r"spans z = .*Move its origin so that it lies inside \(origin z "
+                                                r"within 8\.\.22\)"):
+            oif.OifCell(cell_type=half, particle_type=0, origin=[20, 15, 25])
+        oif.OifCell(cell_type=half, particle_type=0, origin=[20, 15, 22])
 
     def test_stale_cell_objects(self):
         """After clear() or removal, a cell object refuses to compute on other particles."""

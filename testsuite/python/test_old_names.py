@@ -61,6 +61,53 @@ class OldNames(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "'bb1'"):
             lbf.print_vtk_velocity(self.path("v.vtk"), bb1=[0, 0, 0], bb2=[2, 2, 2])
 
+    def test_lb_fric(self):
+        """ESPResSo <= 4.0's LBFluid(fric=gamma) (and set_lb(kT=...) without a
+        fluid): the particles couple with that friction, exactly as with
+        thermostat.set_lb(LB_fluid=lbf, gamma=gamma); each form warns once."""
+        def run(old):
+            s = lbmd.System(box_l=[8.0] * 3)
+            s.time_step = 0.1
+            s.cell_system.skin = 0.2
+            p = s.part.add(pos=[4.0, 4.0, 4.0])
+            params = dict(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[1e-3, 0, 0])
+            if old:
+                lbf, caught = self.record(lambda: lbmd.lb.LBFluid(fric=2.0, **params))
+                self.assertEqual(len(caught), 1)
+                self.assertIn("LBFluid(fric=...)", str(caught[0].message))
+                s.actors.add(lbf)
+                _, caught = self.record(lambda: s.thermostat.set_lb(kT=0.0))
+                self.assertEqual(len(caught), 1)
+            else:
+                lbf = lbmd.lb.LBFluid(**params)
+                s.actors.add(lbf)
+                s.thermostat.set_lb(LB_fluid=lbf, gamma=2.0)
+            s.integrator.run(100)
+            return s.thermostat.get_state(), p.v.copy()
+
+        old_state, old_v = run(True)
+        new_state, new_v = run(False)
+        self.assertEqual(old_state, new_state)
+        np.testing.assert_array_equal(old_v, new_v)
+        self.assertGreater(old_v[0], 0.0)  # carried by the fluid
+        with self.assertRaisesRegex(ValueError, "'fric' must be >= 0"):
+            lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, fric=-1.0)
+        s = lbmd.System(box_l=[8.0] * 3)
+        s.time_step = 0.1
+        lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1)
+        s.actors.add(lbf)
+        with self.assertRaisesRegex(ValueError, "'kT'.*the fluid's"):
+            s.thermostat.set_lb(LB_fluid=lbf, gamma=1.0, kT=1.0)
+
+    def test_cell_wider_than_closed_box(self):
+        """ESPResSo 4.1's OIF test builds a cell wider than its non-periodic
+        box: refused, the message says how to port it (doc/porting.md)."""
+        s = lbmd.System(box_l=[22.0, 14.0, 15.0], periodicity=[True, True, False])
+        ct = oif.OifCellType(*oif.mesh_files("rbc374"), system=s, resize=(8.0,) * 3, ks=0.05)
+        with self.assertRaisesRegex(ValueError, r"the cell spans z = .*not periodic.*wider than the box.*porting.md"):
+            oif.OifCell(cell_type=ct, particle_type=0, origin=[11.0, 7.0, 7.5], rotate=[np.pi / 2, 0, 0])
+        self.assertEqual(len(s.part), 0)
+
     def test_particle_indexing(self):
         s = lbmd.System(box_l=[10.0, 10.0, 10.0])
         for pid in (0, 1, 2, 3, 5, 8):

@@ -109,6 +109,29 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box
 # ---------------------------------------------------------------------------
 # point / edge / triangle / angle views (PyOIF API)
 # ---------------------------------------------------------------------------
+def check_closed_extent(owner, system, pos, what="the cell"):
+    """Raise ValueError, before anything is added, for a cell reaching out of
+    the box along an axis that is not periodic: there is no image to fold
+    its nodes into. ESPResSo 4.1's own OIF test builds a cell wider than its
+    box; doc/porting.md says how to port such a scene."""
+    box = np.asarray(system.box_l, dtype=float)
+    periodic = np.asarray(system.periodicity, dtype=bool)
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    for axis in range(3):
+        if periodic[axis] or (lo[axis] >= 0.0 and hi[axis] <= box[axis]):
+            continue
+        xyz = "xyz"[axis]
+        wider = hi[axis] - lo[axis] > box[axis]
+        raise ValueError(
+            f"{owner}: {what} spans {xyz} = {lo[axis]:.6g}..{hi[axis]:.6g}, out of the box 0..{box[axis]:.6g} "
+            f"along {xyz}, which is not periodic (box_l[{axis}]). "
+            + (f"It is wider than the box: make box_l[{axis}] at least {hi[axis] - lo[axis]:.6g} (plus the "
+               f"walls' room) and place it inside; ESPResSo 4.1 ran such cells with nodes outside the box "
+               f"(doc/porting.md, 'Cells wider than the box')" if wider else
+               f"Move its origin so that it lies inside (origin {xyz} within "
+               f"{pos[:, axis].mean() - lo[axis]:.6g}..{box[axis] - (hi[axis] - pos[:, axis].mean()):.6g})"))
+
+
 class OverlapWarning(UserWarning):
     """A new OifCell placed over another cell or inside a wall (the run
     would stop with membrane_crossing or wall_penetration, or push the
@@ -159,8 +182,13 @@ def _warn_overlaps(owner, system, pos, triangles, cell_id):
         olo, ohi = other.min(axis=0), other.max(axis=0)
         if np.any(olo > hi) or np.any(ohi < lo):
             continue
-        mine = pos[np.all((pos >= olo) & (pos <= ohi), axis=1)]
-        theirs = other[np.all((other >= lo) & (other <= hi), axis=1)]
+        # the nodes in the other's box, and the centre: two cells placed at one
+        # origin have every node on the other's surface (winding about 1/2,
+        # either side of the test), their centres well inside each other
+        mine = np.vstack([pos, pos.mean(axis=0)])
+        mine = mine[np.all((mine >= olo) & (mine <= ohi), axis=1)]
+        theirs = np.vstack([other, other.mean(axis=0)])
+        theirs = theirs[np.all((theirs >= lo) & (theirs <= hi), axis=1)]
         if (len(mine) and np.any(_winding(mine, other, c.cell_type.mesh._topo.triangles) > 0.5)) or \
                 (len(theirs) and np.any(_winding(theirs, pos, triangles) > 0.5)):
             hits.append(f"cell {c.cell_id}")
@@ -989,6 +1017,7 @@ class OifCell:
             raise ValueError(f"{owner}: no cell ids left (system.max_oif_objects = {cell_id})")
         pos = cell_type.mesh._placed_positions(origin, rotate)
         check_periodic_extent(owner, system, pos, cell_type.mesh.max_edge_length())
+        check_closed_extent(owner, system, pos)
         if not isinstance(check_overlaps, (bool, np.bool_)):
             raise TypeError(f"{owner}: parameter 'check_overlaps' must be True or False, got {check_overlaps!r}")
         if check_overlaps:

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _lbmd
 from .old_names import warn_old_name
-from .validation import Param, ParameterObject, check_not_metres, non_negative, positive
+from .validation import Param, ParameterObject, check_not_metres, non_negative, parse, positive
 
 _COLLISIONS = ("MRT", "MRT_ESPRESSO", "TRT", "BGK")
 
@@ -60,6 +60,17 @@ class LBFluid(ParameterObject):
                Param("speed_watch_every", "int", 100, check=non_negative,
                      doc="lattice updates between two looks for the fastest node during a run "
                          "(a warning past the advised Mach number; 0: off)")]
+
+    def __init__(self, *args, **kwargs):
+        # ESPResSo <= 4.0 gave the coupling's friction to the fluid,
+        # LBFluid(..., fric=gamma); since 4.1 it is thermostat.set_lb's gamma.
+        # Kept: the fluid couples with it when added (system.actors.add)
+        fric = kwargs.pop("fric", None)
+        if fric is not None:
+            fric = parse("LBFluid", [Param("fric", "float", check=non_negative)], {"fric": fric})["fric"]
+            warn_old_name("LBFluid(fric=...)", "system.thermostat.set_lb(LB_fluid=lbf, gamma=...)")
+        super().__init__(*args, **kwargs)
+        object.__setattr__(self, "_old_fric", fric)
 
     def _validate(self):
         check_not_metres("LBFluid: parameter 'agrid'", self.agrid)

@@ -211,6 +211,23 @@ class ParticleSlice(_ParticleView):
         return f"ParticleSlice({len(self)} particles, ids [{shown}])"
 
 
+def _check_inside_closed_axes(owner, system, pos):
+    """Refuse positions outside the box along an axis that is not periodic:
+    there is no image to fold them into, and the engine would lose them."""
+    periodic = np.asarray(system.periodicity, dtype=bool)
+    if periodic.all() or not np.all(np.isfinite(pos)):
+        return  # (non-finite positions are refused by the engine, with their own message)
+    box = np.asarray(system.box_l, dtype=float)
+    outside = ~periodic & ((pos < 0.0) | (pos > box))
+    if outside.any():
+        k, axis = (int(i) for i in np.argwhere(outside)[0])
+        name = "xyz"[axis]
+        raise ValueError(f"{owner}: parameter 'pos': particle {k} at {name} = {pos[k, axis]:g} is outside the box "
+                         f"(0..{box[axis]:g}) along {name}, which is not periodic (periodicity "
+                         f"{[bool(v) for v in periodic]}); {int(outside.any(axis=1).sum())} of {len(pos)} "
+                         f"particles are outside: place them inside, or make {name} periodic")
+
+
 class ParticleList:
     """``system.part``: create, find and remove particles."""
 
@@ -247,6 +264,7 @@ class ParticleList:
             raise ValueError(f"ParticleList.add: parameter 'pos' must have 3 components per particle, "
                              f"got shape {np.shape(kwargs['pos'])}")
         n = pos.shape[0]
+        _check_inside_closed_axes("ParticleList.add", self._system, pos)
 
         def per_particle_vec(name, default):
             value = kwargs.get(name, default)

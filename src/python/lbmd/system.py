@@ -256,9 +256,22 @@ class Thermostat:
             raise ValueError("thermostat.set_langevin: parameter 'seed' is required when kT > 0")
         self._system._core.set_langevin(v["kT"], v["gamma"], v["seed"] or 0)
 
-    def set_lb(self, LB_fluid=None, gamma=None, seed=None, act_on_virtual=True):
-        """Couple all particles to the fluid LB_fluid with friction gamma."""
+    def set_lb(self, LB_fluid=None, gamma=None, seed=None, act_on_virtual=True, kT=None):
+        """Couple all particles to the fluid LB_fluid with friction gamma.
+        (ESPResSo <= 4.0: ``set_lb(kT=...)`` with the friction given to the
+        fluid as LBFluid(fric=...): the active fluid and its fric.)"""
         from .lb import LBFluid
+        if LB_fluid is None:
+            old = [a for a in self._system.actors if getattr(a, "_old_fric", None) is not None]
+            if old:
+                from .old_names import warn_old_name
+                warn_old_name("thermostat.set_lb(kT=...) with LBFluid(fric=...)",
+                              "system.thermostat.set_lb(LB_fluid=lbf, gamma=...)")
+                LB_fluid = old[0]
+                gamma = old[0]._old_fric if gamma is None else gamma
+        if kT is not None and LB_fluid is not None and float(kT) != float(LB_fluid.kT):
+            raise ValueError(f"thermostat.set_lb: parameter 'kT' ({kT}) differs from the fluid's kT "
+                             f"({LB_fluid.kT}): the temperature is the fluid's, LBFluid(kT=..., seed=...)")
         if not isinstance(LB_fluid, LBFluid):
             raise TypeError("thermostat.set_lb: parameter 'LB_fluid' must be an lbmd.lb.LBFluid, "
                             f"got {type(LB_fluid).__name__}")
@@ -310,6 +323,11 @@ class Actors:
             raise ValueError("actors.add: this actor is already active")
         actor._activate(self._system)
         self._list.append(actor)
+        fric = getattr(actor, "_old_fric", None)
+        if fric is not None and self._system.thermostat._lb is None:
+            # LBFluid(fric=...) of ESPResSo <= 4.0: the particles coupled with
+            # that friction as soon as the fluid was there
+            self._system.thermostat.set_lb(LB_fluid=actor, gamma=fric)
         return actor
 
     def remove(self, actor):
@@ -317,8 +335,20 @@ class Actors:
             raise ValueError("actors.remove: this actor is not active")
         actor._deactivate(self._system)
         self._list.remove(actor)
-        if self._system.thermostat._lb is not None and self._system.thermostat._lb[0] is actor:
-            self._system.thermostat._lb = None
+        thermostat = self._system.thermostat
+        if thermostat._lb is not None and thermostat._lb[0] is actor:
+            # the coupling goes with its fluid; said aloud, since the cells
+            # then stay where they are while the script runs on
+            import warnings
+            from .settings_check import SettingsWarning
+            gamma = thermostat._lb[1]
+            self._system._core.set_lb_coupling_off()
+            thermostat._lb = None
+            n = len(self._system.part.all())
+            warnings.warn(f"actors.remove: the thermostat coupled the particles to this fluid (set_lb, gamma "
+                          f"{gamma:g}); the coupling is switched off with it, so the {n} particles are no longer "
+                          f"carried by any fluid. Add a fluid and call thermostat.set_lb again (or "
+                          f"thermostat.set_langevin for particles without fluid)", SettingsWarning, stacklevel=2)
 
     def clear(self):
         for a in list(self._list):
