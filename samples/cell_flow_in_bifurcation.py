@@ -40,8 +40,11 @@ slow flow, reached in 1/27 of the time.
 Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
 - cells.csv: per output and cell, the centre (x, y, z; x folded into the
   box), velocity, surface, volume, diameter, rotation angle (of the node
-  that was furthest downstream at the start, about the centre) and the
-  pass (how often the cell went round the periodic channel);
+  that was furthest downstream at the start, about the centre), the
+  pass (how often the cell went round the periodic channel), and the
+  per-cell observables of doc/oif.md: Taylor's deformation index, the
+  largest edge and local-area strains, and the damage record (time above
+  5 % local area strain so far, and the largest seen);
 - branches.csv: the branch each cell entered on each pass;
 - crossings.csv: centre y and z where a cell crossed x = 75 um (the
   branches' middle) and x = 130 um (after the confluence) -- Fig 2;
@@ -53,7 +56,8 @@ Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
   with --vtk at the full one;
 - scene_start.png, scene_end.png: the device and its cells seen from above
   (lbmd.visualization) at the start and the end;
-- bifurcation_fig2..5.png from samples/analysis/plot_bifurcation.py (also
+- bifurcation_fig2..5.png and bifurcation_damage.png (deformation, strain
+  and damage over time) from samples/analysis/plot_bifurcation.py (also
   run by hand to combine seeds; --no-plots skips these and the pictures).
 - checkpoint.h5 (or --checkpoint FILE): the whole state, written on
   SIGTERM or SIGUSR1 (a batch system's walltime warning; the run then exits
@@ -564,7 +568,9 @@ resumed is None and file_output.write_text(os.path.join(args.output, "scene.json
     fluid_volume_um3={k: float(v) for k, v in fluid_volume.items()}), indent=1) + "\n")
 tables = dict(
     cells=Table("cells.csv", ["time_ms", "cell", "type", "x_um", "y_um", "z_um", "vx_mm_s", "vy_mm_s", "vz_mm_s",
-                              "surface_um2", "volume_um3", "diameter_um", "rotation_deg", "pass"]),
+                              "surface_um2", "volume_um3", "diameter_um", "rotation_deg", "pass",
+                              "deformation_index", "max_edge_strain", "max_area_strain", "damage_time_ms",
+                              "peak_area_strain"]),
     branches=Table("branches.csv", ["cell", "type", "pass", "branch", "time_ms"]),
     crossings=Table("crossings.csv", ["time_ms", "cell", "type", "plane_x_um", "y_um", "z_um", "pass"]),
     haematocrit=Table("haematocrit.csv", ["time_ms", "parent", "lower", "upper"]
@@ -584,6 +590,7 @@ def record():
     t = to_ms(system.time - time0)
     cell_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}
     stiff_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}  # the stiff population's share
+    oif.update_damage(cells, system.time)  # each cell's time above 5 % local area strain (doc/oif.md)
     for k, c in enumerate(cells):
         centre = c.get_origin()
         x, y, z = np.mod(centre, system.box_l)
@@ -597,7 +604,9 @@ def record():
             stiff_volume[region_of(x, y)] += volume
         tables["cells"].row(t, k, c.particle_type, float(x), float(y), float(z),
                             *(float(to_mm_s(v)) for v in velocity), float(surface), float(volume),
-                            float(c.diameter()), float(math.degrees(c.get_rotation_angles()[0])), lap)
+                            float(c.diameter()), float(math.degrees(c.get_rotation_angles()[0])), lap,
+                            c.deformation_index(), c.max_edge_strain(), c.max_area_strain(),
+                            float(to_ms(c.damage.time_above)), c.damage.peak_strain)
         if split + 8.0 < x < join and (k, lap) not in entered:
             entered[k, lap] = region_of(x, y)
             tables["branches"].row(k, c.particle_type, lap, entered[k, lap], t)

@@ -251,6 +251,43 @@ def figure5(runs, plt, window_ms=None):
     return fig
 
 
+def figure_damage(runs, plt):
+    """Per-cell observables over time (doc/oif.md): the deformation index
+    and the largest local area strain, mean over the cells of each type with
+    the largest as a thin line, and each cell's damage time (above 5 % local
+    area strain) at the end; None for runs written before these columns."""
+    if not all("max_area_strain" in run["cells"] for run in runs):
+        return None
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
+    names = {0: "RBCs", 1: "rare cell", 2: "stiff RBCs"}
+    colours = {0: "tab:red", 1: "k", 2: "tab:purple"}
+    for run in runs:
+        c = run["cells"]
+        for kind in sorted({int(t) for t in c["type"]}):
+            sel = c["type"] == kind
+            times = np.unique(c["time_ms"][sel])
+            for ax, key in zip(axes[:2], ("deformation_index", "max_area_strain")):
+                per_time = [c[key][sel & (c["time_ms"] == t)] for t in times]
+                label = names.get(kind, f"type {kind}") if run is runs[0] else None
+                ax.plot(times, [v.mean() for v in per_time], color=colours.get(kind, "0.5"), label=label)
+                ax.plot(times, [v.max() for v in per_time], color=colours.get(kind, "0.5"), lw=0.6, alpha=0.6)
+            last = sel & (c["time_ms"] == times[-1])
+            axes[2].hist(c["damage_time_ms"][last], bins=10, color=colours.get(kind, "0.5"), alpha=0.6,
+                         label=names.get(kind, f"type {kind}") if run is runs[0] else None)
+    axes[0].set_ylabel("deformation index (a - c) / (a + c)")
+    axes[1].set_ylabel("largest local area strain |A / A0 - 1|")
+    axes[1].axhline(0.05, color="k", ls=":", lw=0.8)
+    for ax in axes[:2]:
+        ax.set_xlabel("time (ms); thick: mean over the cells, thin: the largest")
+        ax.legend(fontsize=8)
+    axes[2].set_xlabel("time above 5 % local area strain (ms), at the end")
+    axes[2].set_ylabel("cells")
+    axes[2].legend(fontsize=8)
+    fig.suptitle(f"cell deformation and damage (after Gusenbauer et al. 2018), case {runs[0]['scene']['case']}")
+    fig.tight_layout()
+    return fig
+
+
 def make_figures(folders, output=None, window_ms=None, bins=20, runs=None):
     """Read the runs in `folders` (or take them as read, `runs`), write the
     four PNGs into `output` (default: the first folder); returns their
@@ -266,6 +303,12 @@ def make_figures(folders, output=None, window_ms=None, bins=20, runs=None):
     for number, fig in ((2, figure2(runs, plt, bins)), (3, figure3(runs, plt)), (4, figure4(runs, plt)),
                         (5, figure5(runs, plt, window_ms))):
         path = os.path.join(output, f"bifurcation_fig{number}.png")
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    fig = figure_damage(runs, plt)
+    if fig is not None:
+        path = os.path.join(output, "bifurcation_damage.png")
         fig.savefig(path, dpi=110)
         plt.close(fig)
         paths.append(path)

@@ -190,6 +190,21 @@ class Samples(unittest.TestCase):
         self.assertIn("total (200 steps)", out)  # the timing report
         for number in (2, 3, 4, 5):  # the paper's figures, from plot_bifurcation.py
             self.assertGreater(os.path.getsize(os.path.join(folder, f"bifurcation_fig{number}.png")), 10000)
+        self.assertGreater(os.path.getsize(os.path.join(folder, "bifurcation_damage.png")), 10000)
+        # the per-cell observables: a relaxed RBC's deformation index is the
+        # spread of its nodes through its thickness against across its width
+        # (0.357 on rbc374), its
+        # strains start at 0 and stay small in 200 steps of this flow, the
+        # damage time is 0 below 5 % and never longer than the run
+        first = [r for r in cells if float(r["time_ms"]) == 0.0]
+        for r in first:
+            self.assertAlmostEqual(float(r["deformation_index"]), 0.357, delta=0.002)
+            self.assertLess(float(r["max_edge_strain"]), 1e-9)
+            self.assertLess(float(r["max_area_strain"]), 1e-9)
+        for r in cells:
+            self.assertLess(float(r["max_area_strain"]), 0.2, r)
+            self.assertLessEqual(float(r["damage_time_ms"]), float(r["time_ms"]) + 1e-12)
+            self.assertGreaterEqual(float(r["peak_area_strain"]), float(r["max_area_strain"]) - 1e-12)
         # with the stiff rare cell (642 nodes, its own particle type) and VTK
         run_sample("cell_flow_in_bifurcation.py", "--cells", "2", "--rare", "--cycles", "1", "--steps", "20",
                    "--output", "rare", "--vtk", "--no-plots", cwd=self.tmp.name)

@@ -28,7 +28,7 @@ and keywords of PyOIF (ESPResSo 4.2's ``object_in_fluid``), so that
 import os as _os
 
 from .oif_classes import (FixedPoint, PartPoint, Edge, Triangle, Angle, ThreeNeighbors, Mesh,  # noqa: F401
-                          OifCellType, OifCell, OverlapWarning)
+                          OifCellType, OifCell, OverlapWarning, CellDamage, update_damage, DAMAGE_AREA_STRAIN)
 from . import oif_utils  # noqa: F401
 # the helpers ESPResSo 4.2's object_in_fluid exports at package level
 from .oif_utils import (custom_str, get_triangle_normal, norm, vec_distance, area_triangle,  # noqa: F401
@@ -70,4 +70,4 @@ __all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbo
            "oif_calc_linear_stretching_force", "oif_calc_bending_force", "oif_calc_local_area_force",
            "oif_calc_global_area_force", "oif_calc_volume_force", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
            "output_vtk_lines", "seed_cells", "SeedingError", "fluid_volume", "pack_cells", "PackingError", "PackedCells", "covering_radius",
-           "contacts", "contact_settings", "set_contacts", "CellFlow", "scene_parameters", "ScenePlan", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]
+           "contacts", "contact_settings", "set_contacts", "CellFlow", "scene_parameters", "ScenePlan", "CellDamage", "update_damage", "DAMAGE_AREA_STRAIN", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

@@ -132,6 +132,70 @@ def check_closed_extent(owner, system, pos, what="the cell"):
                f"{pos[:, axis].mean() - lo[axis]:.6g}..{box[axis] - (hi[axis] - pos[:, axis].mean()):.6g})"))
 
 
+#: the local area strain above which a cell's time counts as damaging (oif.update_damage)
+DAMAGE_AREA_STRAIN = 0.05
+
+
+class CellDamage:
+    """A cell's damage record over time, after Gusenbauer, Tothova, Mazza,
+    Brandl, Schrefl, Jancigova & Cimrak, "Cell damage index as computational
+    indicator for blood cell activation and damage", Artif. Organs 42, 746
+    (2018), who measure a cell's mechanical load by the change of its
+    membrane's surface area. Here, per cell: `time_above`, the time its
+    largest local area strain (any triangle's abs(A / A0 - 1)) spent above
+    `threshold` (default DAMAGE_AREA_STRAIN, 5 %), summed between the samples
+    oif.update_damage takes (each interval counted by its start: exact to one
+    sampling interval per crossing); `peak_strain`, the largest such strain
+    seen; `samples`, how many were taken."""
+
+    def __init__(self, threshold=None):
+        self.threshold = DAMAGE_AREA_STRAIN if threshold is None else float(threshold)
+        self.time_above = 0.0
+        self.peak_strain = 0.0
+        self.samples = 0
+        self._last = None  # (time, strain) of the previous sample
+
+    def update(self, time, strain):
+        if self._last is not None:
+            t0, s0 = self._last
+            if time < t0:
+                raise ValueError(f"CellDamage.update: time {time:g} is before the previous sample's {t0:g}")
+            if s0 > self.threshold:
+                self.time_above += time - t0
+        self.peak_strain = max(self.peak_strain, float(strain))
+        self._last = (float(time), float(strain))
+        self.samples += 1
+
+    def __repr__(self):
+        return (f"CellDamage(threshold={self.threshold:g}, time_above={self.time_above:g}, "
+                f"peak_strain={self.peak_strain:.4g}, samples={self.samples})")
+
+
+def update_damage(cells, time, threshold=None):
+    """Sample every cell's largest local area strain at `time` (the
+    system's time) into its CellDamage record (cell.damage): call it at each
+    output of the run loop. `threshold` (a fraction; default 5 %) is fixed
+    at a cell's first sample."""
+    if isinstance(cells, OifCell):
+        cells = [cells]
+    if isinstance(time, bool) or not isinstance(time, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(time):
+        raise TypeError(f"update_damage: parameter 'time' must be a finite number, got {time!r}")
+    if threshold is not None and not (isinstance(threshold, (int, float)) and not isinstance(threshold, bool)
+                                      and 0 < threshold < 1):
+        raise ValueError(f"update_damage: parameter 'threshold' is a strain, a fraction in (0, 1), got "
+                         f"{threshold!r}")
+    for c in cells:
+        if not isinstance(c, OifCell):
+            raise TypeError(f"update_damage: parameter 'cells' must hold oif.OifCell, got {type(c).__name__}")
+        if getattr(c, "_damage", None) is None:
+            c._damage = CellDamage(threshold)
+        elif threshold is not None and float(threshold) != c._damage.threshold:
+            raise ValueError(f"update_damage: cell {c.cell_id} is tracked with threshold {c._damage.threshold:g}, "
+                             f"not {threshold:g} (a record keeps its first threshold)")
+        c._damage.update(float(time), c.max_area_strain())
+
+
 class OverlapWarning(UserWarning):
     """A new OifCell placed over another cell or inside a wall (the run
     would stop with membrane_crossing or wall_penetration, or push the
@@ -1222,6 +1286,60 @@ class OifCell:
         """Angle between each remembered node direction and its current one."""
         cur = self.get_rotation_positions()
         return [angle_btw_vectors(a, b) for a, b in zip(self.rot_init_pos, cur)]
+
+    # -- per-cell observables -------------------------------------------------------
+    def _reference_lengths_areas(self):
+        """The relaxed mesh's edge lengths and triangle areas (cached on the type)."""
+        ct = self.cell_type
+        if getattr(ct, "_strain_reference", None) is None:
+            topo = ct.mesh._topo
+            nodes = np.asarray(ct.mesh._nodes, dtype=float)
+            ct._strain_reference = (geo.edge_lengths(nodes, topo.edges), geo.triangle_areas(nodes, topo.triangles))
+        return ct._strain_reference
+
+    def edge_strains(self):
+        """Per mesh edge, its length over its length in the relaxed mesh, minus
+        1 (the stretch the stretching force, eq. 1, acts against)."""
+        l0, _ = self._reference_lengths_areas()
+        return geo.edge_lengths(self.mesh.positions(), self.cell_type.mesh._topo.edges) / l0 - 1.0
+
+    def area_strains(self):
+        """Per triangle, its area over its relaxed area, minus 1 (the local
+        area change the local area force, eq. 5, acts against)."""
+        _, a0 = self._reference_lengths_areas()
+        return geo.triangle_areas(self.mesh.positions(), self.cell_type.mesh._topo.triangles) / a0 - 1.0
+
+    def max_edge_strain(self):
+        """The largest abs(l / l0 - 1) over the edges: the membrane's largest
+        stretch (or compression) now."""
+        return float(np.abs(self.edge_strains()).max())
+
+    def max_area_strain(self):
+        """The largest abs(A / A0 - 1) over the triangles: the largest local area
+        change now, the measure of oif.update_damage."""
+        return float(np.abs(self.area_strains()).max())
+
+    def deformation_index(self):
+        """Taylor's deformation index D = (a - c) / (a + c), a and c the
+        longest and shortest semi-axes, taken proportional to the roots of the
+        largest and smallest eigenvalues of the nodes' gyration tensor (exact
+        for an ellipsoid whose nodes are an evenly meshed sphere stretched
+        along its axes, as a capsule's in shear; 0 for a sphere). A relaxed
+        red cell, a disc, has D = 0.357 (rbc374: the spread of its nodes
+        through its thickness against across its width); as the disc folds
+        or stretches in flow, D changes from there."""
+        pos = self.mesh.positions()
+        d = pos - pos.mean(axis=0)
+        eig = np.clip(np.linalg.eigvalsh(d.T @ d / len(d)), 0.0, None)
+        a, c = np.sqrt(eig[-1]), np.sqrt(eig[0])
+        return float((a - c) / (a + c)) if a + c > 0 else 0.0
+
+    @property
+    def damage(self):
+        """The cell's CellDamage record (oif.update_damage fills it; zero until then)."""
+        if getattr(self, "_damage", None) is None:
+            self._damage = CellDamage()
+        return self._damage
 
     # -- output -------------------------------------------------------------------
     def _vtk_triangles(self):

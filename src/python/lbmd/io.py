@@ -19,7 +19,8 @@ ESPResSo's writer)::
         species/, id/, mol_id/, mass/         {step,time,value[n][N]}
     observables/cells/
         cell_id                mol_id of each cell (fixed)
-        centre/{step,time,value[n][C][3]}, volume/, surface/ {..., value[n][C]}, velocity/
+        centre/{step,time,value[n][C][3]}, volume/, surface/ {..., value[n][C]}, velocity/,
+        deformation_index/, max_edge_strain/, max_area_strain/, damage_time/, peak_area_strain/
 
 Every time-dependent element has its own ``step`` (int64, the system's
 ``step_count``) and ``time`` (float64, ``system.time``) datasets, extensible
@@ -72,6 +73,12 @@ CELL_FIELDS = {
     "volume": "enclosed volume (OifCell.volume)",
     "surface": "surface area (OifCell.surface)",
     "velocity": "mean node velocity (OifCell.get_velocity)",
+    "deformation_index": "Taylor's (a - c) / (a + c) from the nodes' gyration tensor (OifCell.deformation_index)",
+    "max_edge_strain": "largest abs(l / l0 - 1) over the edges (OifCell.max_edge_strain)",
+    "max_area_strain": "largest abs(A / A0 - 1) over the triangles (OifCell.max_area_strain)",
+    "damage_time": "time with max_area_strain above the damage threshold so far (cell.damage.time_above; "
+                   "oif.update_damage fills it)",
+    "peak_area_strain": "largest max_area_strain oif.update_damage has seen (cell.damage.peak_strain)",
 }
 DEFAULT_CELL_FIELDS = ("centre", "volume", "surface")
 
@@ -91,6 +98,11 @@ _CELL_SPECS = {
     "volume": (lambda c: c.volume(), 0),
     "surface": (lambda c: c.surface(), 0),
     "velocity": (lambda c: c.get_velocity(), 3),
+    "deformation_index": (lambda c: c.deformation_index(), 0),
+    "max_edge_strain": (lambda c: c.max_edge_strain(), 0),
+    "max_area_strain": (lambda c: c.max_area_strain(), 0),
+    "damage_time": (lambda c: c.damage.time_above, 0),
+    "peak_area_strain": (lambda c: c.damage.peak_strain, 0),
 }
 
 
@@ -125,7 +137,8 @@ class H5mdWriter:
         self.system = system
         self.fields = check_names(owner, "fields", fields, tuple(FIELDS), allow_empty=False)
         cells = [] if cells is None else list(cells) if not isinstance(cells, (str, bytes)) else None
-        if cells is None or any(not all(hasattr(c, a) for a in ("cell_id", "volume", "surface", "get_origin"))
+        if cells is None or any(not all(hasattr(c, a) for a in ("cell_id", "volume", "surface", "get_origin",
+                                                               "deformation_index", "damage"))
                                 for c in cells):
             raise TypeError(f"{owner}: parameter 'cells' must be a list of oif.OifCell, got {cells!r}")
         self.cells = cells
