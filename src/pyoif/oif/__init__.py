@@ -43,6 +43,7 @@ from . import contacts  # noqa: F401
 from .contacts import contact_settings, set_contacts  # noqa: F401
 from .flow_through import CellFlow  # noqa: F401
 from .scene_plan import scene_parameters, ScenePlan  # noqa: F401
+from .compound import add_nucleus, CellCluster, BiCluster  # noqa: F401
 from . import stretching  # noqa: F401
 from .stretching import stretch_cell  # noqa: F401
 from .vtk_series import CellSeries  # noqa: F401
@@ -70,4 +71,4 @@ __all__ = ["FixedPoint", "PartPoint", "Edge", "Triangle", "Angle", "ThreeNeighbo
            "oif_calc_linear_stretching_force", "oif_calc_bending_force", "oif_calc_local_area_force",
            "oif_calc_global_area_force", "oif_calc_volume_force", "output_vtk_rhomboid", "output_vtk_cylinder", "output_vtk_pore",
            "output_vtk_lines", "seed_cells", "SeedingError", "fluid_volume", "pack_cells", "PackingError", "PackedCells", "covering_radius",
-           "contacts", "contact_settings", "set_contacts", "CellFlow", "scene_parameters", "ScenePlan", "CellDamage", "update_damage", "DAMAGE_AREA_STRAIN", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]
+           "contacts", "contact_settings", "set_contacts", "CellFlow", "scene_parameters", "ScenePlan", "CellDamage", "update_damage", "DAMAGE_AREA_STRAIN", "add_nucleus", "CellCluster", "BiCluster", "stretching", "stretch_cell", "CellSeries", "mesh_files", "available_meshes", "MESH_DIR"]

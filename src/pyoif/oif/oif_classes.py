@@ -1039,7 +1039,8 @@ class OifCell:
 
     ``OifCell(cell_type, origin, particle_type, particle_mass=1.0,
     rotate=None, exclusion_neighbours=True, self_cell_cutoff=None,
-    rotation_ids=(), check_overlaps=True)``
+    rotation_ids=(), check_overlaps=True, inner_particles=0,
+    inner_particle_type=None)``
 
     origin: where the mesh's (0, 0, 0) goes; rotate: angles about x, y, z
     (PyOIF's convention); exclusion_neighbours: True (PyOIF: first and second
@@ -1050,11 +1051,15 @@ class OifCell:
     the new cell overlaps a cell or wall (False: the caller has checked, as
     oif.pack_cells does; the test costs a pass over every cell). Each cell
     gets its own mol_id (``cell_id``), so cells of one particle type still
-    collide with each other.
+    collide with each other. inner_particles: that many particles spread
+    through the cell's inside, caged by the advised contact with the
+    membrane and moving with the cell (``cell.inner_particles``; type
+    inner_particle_type, default the cell's; doc/compound-cells.md).
     """
 
     def __init__(self, cell_type=None, origin=None, particle_type=None, particle_mass=1.0, rotate=None,
-                 exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=(), check_overlaps=True):
+                 exclusion_neighbours=True, self_cell_cutoff=None, rotation_ids=(), check_overlaps=True,
+                 inner_particles=0, inner_particle_type=None):
         owner = "OifCell"
         # every argument is checked before anything is added to the system
         if not isinstance(cell_type, OifCellType):
@@ -1072,6 +1077,14 @@ class OifCell:
         if self_cell_cutoff is not None:
             self_cell_cutoff = _real(owner, "self_cell_cutoff", self_cell_cutoff, "nonneg")
         rotation_ids = _node_ids(owner, "rotation_ids", rotation_ids, cell_type.mesh.get_n_nodes())
+        if isinstance(inner_particles, bool) or not isinstance(inner_particles, (int, np.integer)) \
+                or inner_particles < 0:
+            raise ValueError(f"{owner}: parameter 'inner_particles' must be a whole number >= 0, got "
+                             f"{inner_particles!r}")
+        if inner_particle_type is not None and (not _is_int(inner_particle_type)
+                                                or not 0 <= inner_particle_type <= _INT32_MAX):
+            raise TypeError(f"{owner}: parameter 'inner_particle_type' must be an integer in 0..{_INT32_MAX}, "
+                            f"got {inner_particle_type!r}")
 
         system = cell_type.system
         # cell ids never repeat (a stale cell object is recognised by its mol_id);
@@ -1104,6 +1117,14 @@ class OifCell:
             self._discard()  # no half-built cell stays behind
             raise
         system.max_oif_objects = cell_id + 1
+        self.inner_ids = []
+        if inner_particles:
+            from .compound import add_inner_particles
+            try:
+                self.inner_ids = add_inner_particles(self, int(inner_particles), inner_particle_type)
+            except BaseException:
+                self._discard()
+                raise
         cell_registry.register(self)
 
     def __setstate__(self, state):
@@ -1136,6 +1157,18 @@ class OifCell:
         them its bonds and exclusions (e.g. at an outlet, oif.CellFlow). The
         object keeps its parameters; its geometry can no longer be read."""
         self.mesh._live_parts().remove()
+        self._remove_inner()
+
+    @property
+    def inner_particles(self):
+        """The inner particles (a ParticleSlice; empty without)."""
+        return self.system.part.by_ids(getattr(self, "inner_ids", []))
+
+    def _remove_inner(self):
+        ids = [i for i in getattr(self, "inner_ids", []) if self.system.part.exists(i)]
+        if ids:
+            self.system.part.by_ids(ids).remove()
+        self.inner_ids = []
 
     def _discard(self):
         """Removes the cell's particles (and so their bonds and exclusions)
