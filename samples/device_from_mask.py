@@ -65,7 +65,7 @@ import numpy as np
 import lbmd
 import oif
 from lbmd import file_output, lb, lbboundaries
-from lbmd.open_boundaries import PressureOutlet, VelocityInlet
+from lbmd.open_boundaries import PressureOutlet, VelocityInlet, find_ports, port_flow, port_region
 from lbmd.shapes import Extrusion
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -157,23 +157,8 @@ system.lbboundaries.add(lbboundaries.LBBoundary(shape=device))
 system.constraints.add(shape=device, particle_type=10, penetrable=False)
 
 
-def find_ports(fluid, z):
-    """The runs of fluid nodes on each side face of the box (x-, x+, y-,
-    y+), on the node plane z (the layout is extruded: every height alike).
-    Returns a list of (face, first node, last node) along the face's other
-    in-plane axis (on a side that is no port: none, it is wall)."""
-    flags = np.asarray(fluid[:, :, z].boundary)
-    ports = []
-    for face, line in (("x-", flags[0, :]), ("x+", flags[-1, :]), ("y-", flags[:, 0]), ("y+", flags[:, -1])):
-        fluid_nodes = np.flatnonzero(line == 0)
-        if len(fluid_nodes):
-            for run in np.split(fluid_nodes, np.flatnonzero(np.diff(fluid_nodes) > 1) + 1):
-                ports.append((face, int(run[0]), int(run[-1])))
-    return ports
-
-
 system.prepare()  # the lattice flagged: the ports are read from it
-ports = find_ports(lbf, int(round(0.5 * box[2] - 0.5)))
+ports = find_ports(lbf, int(round(0.5 * box[2] - 0.5)))  # each run of fluid nodes on a side face
 inlets = [p for p in ports if p[0] == args.inlet]
 outlets = [p for p in ports if p[0] in args.outlets]
 for face in [args.inlet] + args.outlets:
@@ -189,26 +174,7 @@ for face in args.outlets:
 def port_box(port, depth_from, depth_to):
     """The box of a port's run of nodes, from depth_from to depth_to (um)
     inside its face, over the channel's height."""
-    face, first, last = port
-    axis, other = (0, 1) if face[0] == "x" else (1, 0)
-    lo, hi = np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, H + 1.0])
-    lo[other], hi[other] = first, last + 1.0
-    if face[1] == "-":
-        lo[axis], hi[axis] = depth_from, depth_to
-    else:
-        lo[axis], hi[axis] = box[axis] - depth_to, box[axis] - depth_from
-    return lo, hi
-
-
-def port_flow(port):
-    """Volume per time out of the device through a port's run of nodes (the
-    node plane two spacings inside the face; MD units)."""
-    face, first, last = port
-    axis = 0 if face[0] == "x" else 1
-    index = 2 if face[1] == "-" else int(round(box[axis])) - 3
-    plane = lbf[index, :, :] if axis == 0 else lbf[:, index, :]
-    u = np.asarray(plane.velocity)[first:last + 1, :, axis]
-    return float(u.sum()) * (-1.0 if face[1] == "-" else 1.0)  # agrid^2 = 1
+    return port_region(port, box, (depth_from, depth_to), (1.0, H + 1.0))
 
 
 # --- the cells: the paper's red cells, their membranes S times stiffer
@@ -307,7 +273,7 @@ events_file.close()
 picture("scene_end.png")
 volumes = [c.volume() for c in flow.cells]
 fluxes = {f.face: lbf.open_boundaries.mass_flux(f.face) for f in lbf.open_boundaries}
-flows = [port_flow(p) for p in outlets]
+flows = [port_flow(lbf, p) for p in outlets]
 say(f"{len(flow.added)} cells entered, {len(flow.removed)} left; {len(flow.cells)} in the device at the end"
     + (f"; cell volumes {min(volumes):.1f}-{max(volumes):.1f} um^3" if volumes else ""))
 say("mass flux out of the device over the mass flux in: "

@@ -32,7 +32,7 @@ import numpy as np
 
 import lbmd
 from lbmd import lb, lbboundaries, shapes
-from lbmd.open_boundaries import PressureOutlet, VelocityInlet
+from lbmd.open_boundaries import PressureOutlet, Port, VelocityInlet, find_ports, port_flow, port_region
 
 VISC = 1.0 / 6.0   # lattice units (agrid 1, tau 1): relaxation rate 1
 CS2 = 1.0 / 3.0
@@ -217,6 +217,43 @@ class Checkpoint(unittest.TestCase):
         self.assertEqual(len(ns.lbf.open_boundaries), 2)
         ns.system.integrator.run(100)
         np.testing.assert_array_equal(lbf[:, :, :].population, ns.lbf[:, :, :].population)
+
+
+class Ports(unittest.TestCase):
+    def test_t_junction(self):
+        """find_ports reads the T-junction's three ports off the lattice
+        (samples/data/t_junction.svg: a main channel 12 wide, a branch 12
+        wide up to y+); port_region boxes them; port_flow's outflows add up
+        to the inflow (mass conservation, within 1 %) once the flow is
+        steady."""
+        layout = os.path.join(os.environ.get("PYOIF_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", "..")),
+                              "samples", "data", "t_junction.svg")
+        device = shapes.Extrusion.from_svg(layout, z=[1.0, 13.0], direction=-1, origin=(0.0, 1.0))
+        s = lbmd.System(box_l=[60.0, 37.0, 14.0])
+        s.time_step = 0.1
+        lbf = lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1)
+        s.actors.add(lbf)
+        s.lbboundaries.add(lbboundaries.LBBoundary(shape=device))
+        ports = find_ports(lbf)
+        self.assertEqual(ports, [Port("x-", 1, 12), Port("x+", 1, 12), Port("y+", 24, 35)])
+        self.assertEqual(ports[2].face, "y+")
+        lo, hi = port_region(ports[2], s.box_l, depth=(0.0, 5.0), heights=(1.0, 13.0))
+        np.testing.assert_array_equal(lo, [24.0, 32.0, 1.0])
+        np.testing.assert_array_equal(hi, [36.0, 37.0, 13.0])
+        lo, hi = port_region(ports[0], s.box_l, depth=(3.0, 18.0), heights=(1.0, 13.0))
+        np.testing.assert_array_equal(lo, [3.0, 1.0, 1.0])
+        np.testing.assert_array_equal(hi, [18.0, 13.0, 13.0])
+        lbf.open_boundaries.add(VelocityInlet(face="x-", profile="poiseuille", mean_velocity=0.01))
+        for face in ("x+", "y+"):
+            lbf.open_boundaries.add(PressureOutlet(face=face, density=1.0))
+        s.integrator.run(4000)
+        inflow = -port_flow(lbf, ports[0])
+        out = [port_flow(lbf, p) for p in ports[1:]]
+        self.assertGreater(inflow, 0.0)
+        self.assertTrue(all(q > 0.0 for q in out), out)
+        self.assertAlmostEqual(sum(out) / inflow, 1.0, delta=0.01)
+        with self.assertRaisesRegex(ValueError, "'z' must be a node index"):
+            find_ports(lbf, z=14)
 
 
 if __name__ == "__main__":

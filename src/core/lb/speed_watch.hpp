@@ -33,7 +33,8 @@ FastNode fastest_node(const Real* f, const std::ptrdiff_t* read, const std::vect
 
 /** What the watch saw since it was last read (MD-independent: lattice units). */
 struct SpeedWatch {
-  /// a pass every `every` updates (0: off)
+  /// a pass every `every` updates (0: off); the Python fluid sets it
+  /// (lbmd.lb.SPEED_WATCH_EVERY, LBFluid(speed_watch_every=...))
   int every = 100;
   bool seen = false;
   double mach = 0.0;          ///< the largest |u| / c_s seen

@@ -36,6 +36,11 @@ def _threads_param():
     return Param("n_threads", "int", 0, check=(lambda n: 0 <= n <= limit, f"in 0..{limit}"))
 
 
+#: lattice updates between two looks of the speed watch (lb/speed_watch.hpp):
+#: 0.3-0.5 % of the update's time (doc/performance.md); the fluid's default
+SPEED_WATCH_EVERY = 100
+
+
 class LBFluid(ParameterObject):
     """D3Q19 lattice-Boltzmann fluid; collision 'MRT' (default; fluctuating
     MRT when kT > 0; odd ghost modes at the magic rate, so walls stay midway
@@ -57,7 +62,7 @@ class LBFluid(ParameterObject):
                Param("single_precision", "bool", False,
                      doc="store the populations as float deviations from the rest state at "
                          "dens and collide them in float (half the memory traffic)"),
-               Param("speed_watch_every", "int", 100, check=non_negative,
+               Param("speed_watch_every", "int", SPEED_WATCH_EVERY, check=non_negative,
                      doc="lattice updates between two looks for the fastest node during a run "
                          "(a warning past the advised Mach number; 0: off)")]
 
@@ -110,7 +115,7 @@ class LBFluid(ParameterObject):
                              balance=system.cell_system.balance == "fluid",
                              single_precision=self.single_precision)
         # (a checkpoint of an older version has no speed_watch_every)
-        core.speed_watch_every = self.__dict__["_values"].get("speed_watch_every", 100)
+        core.speed_watch_every = self.__dict__["_values"].get("speed_watch_every", SPEED_WATCH_EVERY)
         system.lbboundaries._apply(core)
         system._core.set_lb(core)
         object.__setattr__(self, "_core", core)

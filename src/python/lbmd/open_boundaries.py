@@ -296,3 +296,72 @@ class OpenBoundaries:
             if f is face or f.face == face:
                 return float(self._fluid._checked_core().open_boundary_mass_flux(i))
         raise ValueError(f"open_boundaries.mass_flux: {face!r} is not an open face of this fluid")
+
+
+# -- the ports of a device ---------------------------------------------------------
+class Port(tuple):
+    """A run of fluid nodes on a side face of the box: ``(face, first,
+    last)``, first and last the node indices along the face's other
+    in-plane axis (x for the faces y-, y+; y for x-, x+)."""
+    __slots__ = ()
+
+    def __new__(cls, face, first, last):
+        return super().__new__(cls, (face, int(first), int(last)))
+
+    face = property(lambda self: self[0])
+    first = property(lambda self: self[1])
+    last = property(lambda self: self[2])
+
+    def __repr__(self):
+        return f"Port({self.face!r}, {self.first}, {self.last})"
+
+
+def find_ports(fluid, z=None):
+    """The ports of a device extruded along z: per side face (x-, x+, y-,
+    y+), each run of fluid nodes on the node plane `z` (a node index;
+    default the middle plane), as Port(face, first, last). A face with no
+    fluid node is wall; two runs on one face are two ports (two branches
+    ending on one side). Collective (reads the lattice's flags)."""
+    owner = "open_boundaries.find_ports"
+    shape = fluid.shape
+    if z is None:
+        z = shape[2] // 2
+    if isinstance(z, bool) or not isinstance(z, (int, np.integer)) or not 0 <= z < shape[2]:
+        raise ValueError(f"{owner}: parameter 'z' must be a node index in 0..{shape[2] - 1}, got {z!r}")
+    flags = np.asarray(fluid[:, :, int(z)].boundary)
+    ports = []
+    for face, line in (("x-", flags[0, :]), ("x+", flags[-1, :]), ("y-", flags[:, 0]), ("y+", flags[:, -1])):
+        fluid_nodes = np.flatnonzero(line == 0)
+        if len(fluid_nodes):
+            for run in np.split(fluid_nodes, np.flatnonzero(np.diff(fluid_nodes) > 1) + 1):
+                ports.append(Port(face, run[0], run[-1]))
+    return ports
+
+
+def port_region(port, box_l, depth, heights, agrid=1.0):
+    """The box (lo, hi corners) of a port's run of nodes, from depth[0] to
+    depth[1] inside its face, over the z range `heights`: where oif.CellFlow
+    puts cells in (an inlet region) or takes them out (an outlet region)."""
+    face, first, last = port
+    axis, other = (0, 1) if face[0] == "x" else (1, 0)
+    box_l = np.asarray(box_l, dtype=float)
+    lo, hi = np.array([0.0, 0.0, float(heights[0])]), np.array([0.0, 0.0, float(heights[1])])
+    lo[other], hi[other] = first * agrid, (last + 1) * agrid
+    near, far = float(depth[0]), float(depth[1])
+    if face[1] == "-":
+        lo[axis], hi[axis] = near, far
+    else:
+        lo[axis], hi[axis] = box_l[axis] - far, box_l[axis] - near
+    return lo, hi
+
+
+def port_flow(fluid, port):
+    """Volume per time out of the device through a port's run of nodes, on
+    the node plane two spacings inside its face (MD units); negative where
+    the flow goes in. Collective."""
+    face, first, last = port
+    axis = 0 if face[0] == "x" else 1
+    index = 2 if face[1] == "-" else fluid.shape[axis] - 3
+    plane = fluid[index, :, :] if axis == 0 else fluid[:, index, :]
+    u = np.asarray(plane.velocity)[first:last + 1, :, axis]
+    return float(u.sum()) * fluid.agrid ** 2 * (-1.0 if face[1] == "-" else 1.0)
