@@ -44,7 +44,7 @@ Outputs in DIR (--output, default output_bifurcation), in um, ms, mm/s:
   pass (how often the cell went round the periodic channel), and the
   per-cell observables of doc/oif.md: Taylor's deformation index, the
   largest edge and local-area strains, and the damage record (time above
-  5 % local area strain so far, and the largest seen);
+  30 % local area strain so far, and the largest seen);
 - branches.csv: the branch each cell entered on each pass;
 - crossings.csv: centre y and z where a cell crossed x = 75 um (the
   branches' middle) and x = 130 um (after the confluence) -- Fig 2;
@@ -590,7 +590,7 @@ def record():
     t = to_ms(system.time - time0)
     cell_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}
     stiff_volume = {"parent": 0.0, "lower": 0.0, "upper": 0.0}  # the stiff population's share
-    oif.update_damage(cells, system.time)  # each cell's time above 5 % local area strain (doc/oif.md)
+    oif.update_damage(cells, system.time)  # each cell's time above 30 % local area strain (doc/oif.md)
     for k, c in enumerate(cells):
         centre = c.get_origin()
         x, y, z = np.mod(centre, system.box_l)

@@ -251,10 +251,15 @@ def figure5(runs, plt, window_ms=None):
     return fig
 
 
+#: the damage threshold of the figure: oif.DAMAGE_AREA_STRAIN (this script
+#: reads CSV files and runs without the engine)
+DAMAGE_STRAIN = 0.3
+
+
 def figure_damage(runs, plt):
     """Per-cell observables over time (doc/oif.md): the deformation index
     and the largest local area strain, mean over the cells of each type with
-    the largest as a thin line, and each cell's damage time (above 5 % local
+    the largest as a thin line, and each cell's damage time (above 30 % local
     area strain) at the end; None for runs written before these columns."""
     if not all("max_area_strain" in run["cells"] for run in runs):
         return None
@@ -271,16 +276,22 @@ def figure_damage(runs, plt):
                 label = names.get(kind, f"type {kind}") if run is runs[0] else None
                 ax.plot(times, [v.mean() for v in per_time], color=colours.get(kind, "0.5"), label=label)
                 ax.plot(times, [v.max() for v in per_time], color=colours.get(kind, "0.5"), lw=0.6, alpha=0.6)
-            last = sel & (c["time_ms"] == times[-1])
-            axes[2].hist(c["damage_time_ms"][last], bins=10, color=colours.get(kind, "0.5"), alpha=0.6,
+            # each cell's time above the threshold, from its strain at the outputs
+            # (each interval counted by its start, as oif.CellDamage does)
+            damage = []
+            for k in sorted({int(i) for i in c["cell"][sel]}):
+                mine = sel & (c["cell"] == k)
+                t, strain = c["time_ms"][mine], c["max_area_strain"][mine]
+                damage.append(float(np.sum(np.diff(t)[strain[:-1] > DAMAGE_STRAIN])))
+            axes[2].hist(damage, bins=10, color=colours.get(kind, "0.5"), alpha=0.6,
                          label=names.get(kind, f"type {kind}") if run is runs[0] else None)
     axes[0].set_ylabel("deformation index (a - c) / (a + c)")
     axes[1].set_ylabel("largest local area strain |A / A0 - 1|")
-    axes[1].axhline(0.05, color="k", ls=":", lw=0.8)
+    axes[1].axhline(DAMAGE_STRAIN, color="k", ls=":", lw=0.8)
     for ax in axes[:2]:
         ax.set_xlabel("time (ms); thick: mean over the cells, thin: the largest")
         ax.legend(fontsize=8)
-    axes[2].set_xlabel("time above 5 % local area strain (ms), at the end")
+    axes[2].set_xlabel("time above 30 % local area strain (ms), at the end")
     axes[2].set_ylabel("cells")
     axes[2].legend(fontsize=8)
     fig.suptitle(f"cell deformation and damage (after Gusenbauer et al. 2018), case {runs[0]['scene']['case']}")
