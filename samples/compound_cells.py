@@ -13,8 +13,8 @@ the mean speed in the channel is the one asked. The cells start upstream of
 the throat and are followed until they have passed it (x beyond 45 um).
 
 - nucleus: a cell of radius 4 um (sphere642, the red cell's membrane
-  moduli x 3) with a nucleus of radius 2.2 um (sphere162, x 12), kept
-  inside by the contact (oif.add_nucleus);
+  moduli x 3) with a nucleus of radius 2.2 um (sphere162, also x 3: x 12
+  blew up at this time step), kept inside by the contact (oif.add_nucleus);
 - inner: the same cell with 40 inner particles (OifCell(inner_particles=));
 - cluster: two such cells (without nucleus) held by the Morse adhesion of
   oif.BiCluster, one behind the other along the flow.
@@ -50,8 +50,9 @@ HEIGHT = 10e-6          # m, channel height
 THROAT = 6e-6           # m, the narrowest width
 PASSED_X = 45.0         # um: beyond the throat (x 22..38)
 HOST_RADIUS, NUCLEUS_RADIUS = 4e-6, 2.2e-6
-#: a nucleated cell is stiffer than a red cell (a leukocyte's cortex), its
-#: nucleus stiffer still: the red cell's moduli times these
+#: a nucleated cell is stiffer than a red cell (a leukocyte's cortex): the
+#: red cell's moduli times these; a nucleus 12x (stiffer than its cell) blew
+#: up at the plan's time step and speed-up (doc/compound-cells.md)
 HOST_STIFFNESS, NUCLEUS_STIFFNESS = 3.0, 3.0
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -98,7 +99,8 @@ def mean_speed():
 
 # --- the flow: the body force of the plan's mean speed between two walls
 # H apart, scaled (Stokes flow is linear in the force) until the mean speed
-# over the fluid is the plan's within 1 %
+# over the fluid is the plan's within 1 % (the channel's mean: the throat,
+# which set the lattice, runs faster, about 20/6 times by continuity)
 force = plan.slit_force(HEIGHT)
 for _ in range(4):
     lbf.ext_force_density = [force, 0.0, 0.0]

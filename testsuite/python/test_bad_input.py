@@ -818,6 +818,30 @@ def cell_wider_than_closed_box(sc):
     oif.OifCell(cell_type=ct, particle_type=0, origin=[6, 6, 1.5])
 
 
+@case("system.periodicity = [True, True, False] with a cell across the box's z faces", ValueError,
+      "periodicity", "cell 0", "not periodic")
+def cell_change_periodicity(sc):
+    s = lbmd.System(box_l=[20.0] * 3)
+    ct = oif.OifCellType(*SPHERE, system=s, resize=(2.0,) * 3, ks=0.01)
+    cell = oif.OifCell(cell_type=ct, particle_type=0, origin=[10, 10, 1.0])
+    try:
+        s.periodicity = [True, True, False]
+    finally:
+        assert list(s.periodicity) == [True, True, True], "the refused periodicity was applied"
+        del cell
+
+
+@case("system.box_l shrunk along a non-periodic axis past a particle", ValueError, "box_l", "outside the box",
+      "non-periodic z")
+def box_shrunk_past_particle(sc):
+    s = lbmd.System(box_l=[8.0] * 3, periodicity=[True, True, False])
+    s.part.add(pos=[1.0, 1.0, 6.0])
+    try:
+        s.box_l = [8.0, 8.0, 5.0]
+    finally:
+        assert list(s.box_l) == [8.0, 8.0, 8.0], "the refused box was applied"
+
+
 # --- mesh files ----------------------------------------------------------------
 @case("an empty nodes file", ValueError, "nodes.dat", "no data")
 def mesh_empty(sc):

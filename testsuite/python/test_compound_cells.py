@@ -79,7 +79,11 @@ class InnerParticles(unittest.TestCase):
     def test_caged_and_carried(self):
         """Inner particles fill the cell beyond the contact's range, and in a
         flow (a uniform body force on a periodic fluid) they move with the
-        cell and stay inside; removing the cell removes them."""
+        cell and stay inside, though each is also pushed across the flow
+        (+y) with 20 pN: only the contact with the membrane holds them
+        (with the contact switched off two left within 80 us, with 50 pN one
+        got through the soft membrane, ks 0.05); set_origin moves them with
+        the cell; removing the cell removes them."""
         s = lbmd.System(box_l=[20.0] * 3)
         s.time_step = 0.1
         s.cell_system.skin = 0.3
@@ -96,6 +100,7 @@ class InnerParticles(unittest.TestCase):
         lbf = lbmd.lb.LBFluid(agrid=1.0, dens=1.0, visc=1.5, tau=0.1, ext_force_density=[2e-3, 0.0, 0.0])
         s.actors.add(lbf)
         s.thermostat.set_lb(LB_fluid=lbf, gamma=ct.suggest_LBgamma(visc=1.5, dens=1.0))
+        inner.ext_force = np.tile([0.0, 0.02, 0.0], (30, 1))
         start_cell, start_inner = cell.get_origin(), inner.pos.copy()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -106,6 +111,10 @@ class InnerParticles(unittest.TestCase):
         self.assertGreater(moved, 2.0)
         inner_moved = inner.pos[:, 0] - start_inner[:, 0]
         np.testing.assert_allclose(inner_moved / moved, 1.0, atol=0.1)  # each within 10 % of the cell's
+        self.assertGreater(inner.pos[:, 1].mean() - start_inner[:, 1].mean(), 0.5)  # pushed against the membrane
+        before = inner.pos - cell.get_origin()
+        cell.set_origin(cell.get_origin() + [1.5, 0.0, 0.0])
+        np.testing.assert_allclose(inner.pos - cell.get_origin(), before, atol=1e-9)
         cell.remove()
         self.assertEqual(len(s.part), 0)
         with self.assertRaisesRegex(ValueError, "do not fit"):

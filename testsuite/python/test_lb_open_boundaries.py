@@ -237,6 +237,10 @@ class Ports(unittest.TestCase):
         ports = find_ports(lbf)
         self.assertEqual(ports, [Port("x-", 1, 12), Port("x+", 1, 12), Port("y+", 24, 35)])
         self.assertEqual(ports[2].face, "y+")
+        import copy
+        import pickle
+        self.assertEqual(pickle.loads(pickle.dumps(ports[2])), ports[2])
+        self.assertEqual(copy.deepcopy(ports), ports)
         lo, hi = port_region(ports[2], s.box_l, depth=(0.0, 5.0), heights=(1.0, 13.0))
         np.testing.assert_array_equal(lo, [24.0, 32.0, 1.0])
         np.testing.assert_array_equal(hi, [36.0, 37.0, 13.0])

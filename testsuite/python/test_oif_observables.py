@@ -62,8 +62,18 @@ class Observables(unittest.TestCase):
         self.assertAlmostEqual(d.time_above, 2.0, delta=1e-12)
         self.assertAlmostEqual(d.peak_strain, 0.1, delta=1e-12)
         self.assertEqual(d.samples, 4)
-        with self.assertRaisesRegex(ValueError, "before the previous sample"):
+        with self.assertRaisesRegex(ValueError, "before cell 0's previous sample"):
             oif.update_damage(self.cell, 2.5)
+        # all or nothing: a refused cell leaves the others' records as they were
+        other = oif.OifCell(cell_type=self.type, particle_type=0, origin=[8.0] * 3)
+        with self.assertRaisesRegex(ValueError, "before cell 0's previous sample"):
+            oif.update_damage([other, self.cell], 2.5)
+        self.assertEqual(other.damage.samples, 0)
+        self.assertEqual(self.cell.damage.samples, 4)
+        # reading an untracked cell's record does not fix its threshold
+        self.assertEqual(other.damage.threshold, oif.DAMAGE_AREA_STRAIN)
+        oif.update_damage(other, 3.0, threshold=0.2)
+        self.assertEqual(other.damage.threshold, 0.2)
         with self.assertRaisesRegex(ValueError, "keeps its first threshold"):
             oif.update_damage(self.cell, 4.0, threshold=0.1)
         with self.assertRaisesRegex(ValueError, "'threshold' is a strain"):

@@ -87,6 +87,13 @@ class SceneParameters(unittest.TestCase):
         self.assertAlmostEqual(fine.time_step, 0.025, delta=1e-12)  # 0.05 us gives 0.21 %
         self.assertAlmostEqual(fine.time_error, 0.0056 * 0.25 ** 1.4, delta=1e-12)
         self.assertAlmostEqual(fine.node_mass, fine.gamma * 0.025 / 0.3, delta=1e-12)
+        self.assertFalse(fine.accuracy_met)  # rbc374's 4.5 % shape error: said, not hidden
+        self.assertIn("NOT met", str(fine))
+        self.assertTrue(medium.accuracy_met)
+        # the time-step error at tau*'s floor: a large cell on a coarse lattice cannot reach 0.1 %
+        coarse_lattice = oif.scene_parameters(narrowest=20e-6, mean_speed=1e-3, cell_radius=8e-6, accuracy=0.001,
+                                              mesh="rbc2562")
+        self.assertIn("time-step error", coarse_lattice.accuracy_shortfall)
 
     def test_run_time_and_budget(self):
         """The estimated run time is the measured costs times the work (lattice

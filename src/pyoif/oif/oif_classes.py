@@ -109,13 +109,13 @@ def check_periodic_extent(owner, system, pos, longest_edge, what="the cell", box
 # ---------------------------------------------------------------------------
 # point / edge / triangle / angle views (PyOIF API)
 # ---------------------------------------------------------------------------
-def check_closed_extent(owner, system, pos, what="the cell"):
+def check_closed_extent(owner, system, pos, what="the cell", box=None, periodic=None):
     """Raise ValueError, before anything is added, for a cell reaching out of
     the box along an axis that is not periodic: there is no image to fold
     its nodes into. ESPResSo 4.1's own OIF test builds a cell wider than its
     box; doc/porting.md says how to port such a scene."""
-    box = np.asarray(system.box_l, dtype=float)
-    periodic = np.asarray(system.periodicity, dtype=bool)
+    box = np.asarray(system.box_l if box is None else box, dtype=float)
+    periodic = np.asarray(system.periodicity if periodic is None else periodic, dtype=bool)
     lo, hi = pos.min(axis=0), pos.max(axis=0)
     for axis in range(3):
         if periodic[axis] or (lo[axis] >= 0.0 and hi[axis] <= box[axis]):
@@ -189,15 +189,25 @@ def update_damage(cells, time, threshold=None):
                                       and 0 < threshold < 1):
         raise ValueError(f"update_damage: parameter 'threshold' is a strain, a fraction in (0, 1), got "
                          f"{threshold!r}")
+    cells = list(cells)
+    # every cell checked before any is sampled: a refused call changes nothing
     for c in cells:
         if not isinstance(c, OifCell):
             raise TypeError(f"update_damage: parameter 'cells' must hold oif.OifCell, got {type(c).__name__}")
+        record = getattr(c, "_damage", None)
+        if record is None:
+            continue
+        if threshold is not None and float(threshold) != record.threshold:
+            raise ValueError(f"update_damage: cell {c.cell_id} is tracked with threshold {record.threshold:g}, "
+                             f"not {threshold:g} (a record keeps its first threshold)")
+        if record._last is not None and float(time) < record._last[0]:
+            raise ValueError(f"update_damage: time {float(time):g} is before cell {c.cell_id}'s previous sample "
+                             f"at {record._last[0]:g}")
+    strains = [c.max_area_strain() for c in cells]
+    for c, strain in zip(cells, strains):
         if getattr(c, "_damage", None) is None:
             c._damage = CellDamage(threshold)
-        elif threshold is not None and float(threshold) != c._damage.threshold:
-            raise ValueError(f"update_damage: cell {c.cell_id} is tracked with threshold {c._damage.threshold:g}, "
-                             f"not {threshold:g} (a record keeps its first threshold)")
-        c._damage.update(float(time), c.max_area_strain())
+        c._damage.update(float(time), strain)
 
 
 class OverlapWarning(UserWarning):
@@ -1153,8 +1163,10 @@ class OifCell:
         """ValueError when the cell would overlap its own periodic image (or
         its bonds be cut by the nearest-image convention) in a box of these
         lengths and periodicity (check_periodic_extent)."""
-        check_periodic_extent("System", self.system, self.mesh.positions(), self.cell_type.mesh.max_edge_length(),
+        pos = self.mesh.positions()
+        check_periodic_extent("System", self.system, pos, self.cell_type.mesh.max_edge_length(),
                               what=f"cell {self.cell_id}", box=box, periodic=periodic)
+        check_closed_extent("System", self.system, pos, what=f"cell {self.cell_id}", box=box, periodic=periodic)
 
     def remove(self):
         """Takes the cell out of the simulation: its particles go, and with
@@ -1162,6 +1174,9 @@ class OifCell:
         object keeps its parameters; its geometry can no longer be read."""
         self.mesh._live_parts().remove()
         self._remove_inner()
+        nucleus = getattr(self, "nucleus", None)
+        if nucleus is not None and nucleus.is_live():
+            nucleus.remove()  # a nucleus goes with its cell (at an outlet too)
 
     @property
     def inner_particles(self):
@@ -1236,9 +1251,17 @@ class OifCell:
         return self.mesh.positions().mean(axis=0)
 
     def set_origin(self, new_origin=(0.0, 0.0, 0.0)):
-        """Move the cell rigidly so that its mean node position is new_origin."""
+        """Move the cell rigidly so that its mean node position is new_origin;
+        its inner particles and its nucleus (doc/compound-cells.md) move with it."""
         pos = self.mesh.positions()
-        self._parts.pos = pos - pos.mean(axis=0) + _vec3("OifCell.set_origin", "new_origin", new_origin)
+        shift = _vec3("OifCell.set_origin", "new_origin", new_origin) - pos.mean(axis=0)
+        self._parts.pos = pos + shift
+        if getattr(self, "inner_ids", None):
+            inner = self.inner_particles
+            inner.pos = inner.pos + shift
+        nucleus = getattr(self, "nucleus", None)
+        if nucleus is not None and nucleus.is_live():
+            nucleus.set_origin(nucleus.mesh.positions().mean(axis=0) + shift)
 
     def get_approx_origin(self):
         """Mean of the six nodes extremal in x, y, z in the relaxed mesh (cheap centre)."""
@@ -1373,10 +1396,11 @@ class OifCell:
 
     @property
     def damage(self):
-        """The cell's CellDamage record (oif.update_damage fills it; zero until then)."""
-        if getattr(self, "_damage", None) is None:
-            self._damage = CellDamage()
-        return self._damage
+        """The cell's CellDamage record (oif.update_damage fills it; until its
+        first sample an empty record at the default threshold, not kept: the
+        first update_damage still sets the threshold)."""
+        record = getattr(self, "_damage", None)
+        return CellDamage() if record is None else record
 
     # -- output -------------------------------------------------------------------
     def _vtk_triangles(self):

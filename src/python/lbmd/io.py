@@ -137,8 +137,7 @@ class H5mdWriter:
         self.system = system
         self.fields = check_names(owner, "fields", fields, tuple(FIELDS), allow_empty=False)
         cells = [] if cells is None else list(cells) if not isinstance(cells, (str, bytes)) else None
-        if cells is None or any(not all(hasattr(c, a) for a in ("cell_id", "volume", "surface", "get_origin",
-                                                               "deformation_index", "damage"))
+        if cells is None or any(not all(hasattr(c, a) for a in ("cell_id", "volume", "surface", "get_origin"))
                                 for c in cells):
             raise TypeError(f"{owner}: parameter 'cells' must be a list of oif.OifCell, got {cells!r}")
         self.cells = cells

@@ -308,6 +308,9 @@ class Port(tuple):
     def __new__(cls, face, first, last):
         return super().__new__(cls, (face, int(first), int(last)))
 
+    def __getnewargs__(self):  # (pickle, copy: the three fields, not one tuple)
+        return tuple(self)
+
     face = property(lambda self: self[0])
     first = property(lambda self: self[1])
     last = property(lambda self: self[2])

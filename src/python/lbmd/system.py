@@ -261,6 +261,9 @@ class Thermostat:
         (ESPResSo <= 4.0: ``set_lb(kT=...)`` with the friction given to the
         fluid as LBFluid(fric=...): the active fluid and its fric.)"""
         from .lb import LBFluid
+        if LB_fluid is not None and not isinstance(LB_fluid, LBFluid):
+            raise TypeError("thermostat.set_lb: parameter 'LB_fluid' must be an lbmd.lb.LBFluid, "
+                            f"got {type(LB_fluid).__name__}")
         if LB_fluid is None:
             old = [a for a in self._system.actors if getattr(a, "_old_fric", None) is not None]
             if old:
@@ -269,6 +272,8 @@ class Thermostat:
                               "system.thermostat.set_lb(LB_fluid=lbf, gamma=...)")
                 LB_fluid = old[0]
                 gamma = old[0]._old_fric if gamma is None else gamma
+        if kT is not None and (isinstance(kT, bool) or not isinstance(kT, (int, float, np.floating, np.integer))):
+            raise TypeError(f"thermostat.set_lb: parameter 'kT' must be a number, got {kT!r}")
         if kT is not None and LB_fluid is not None and float(kT) != float(LB_fluid.kT):
             raise ValueError(f"thermostat.set_lb: parameter 'kT' ({kT}) differs from the fluid's kT "
                              f"({LB_fluid.kT}): the temperature is the fluid's, LBFluid(kT=..., seed=...)")
@@ -326,8 +331,15 @@ class Actors:
         fric = getattr(actor, "_old_fric", None)
         if fric is not None and self._system.thermostat._lb is None:
             # LBFluid(fric=...) of ESPResSo <= 4.0: the particles coupled with
-            # that friction as soon as the fluid was there
-            self._system.thermostat.set_lb(LB_fluid=actor, gamma=fric)
+            # that friction as soon as the fluid was there; a coupling that
+            # cannot be made takes the fluid out again
+            try:
+                self._system.thermostat.set_lb(LB_fluid=actor, gamma=fric, seed=actor.seed)
+            except (TypeError, ValueError) as e:
+                actor._deactivate(self._system)
+                self._list.remove(actor)
+                raise type(e)(f"actors.add: the coupling LBFluid(fric={fric:g}) asks for could not be made: "
+                              f"{e}") from None
         return actor
 
     def remove(self, actor):
@@ -530,6 +542,21 @@ class System:
                              f"fluid (system.actors.remove), change the box, add a new fluid")
         self._check_cells_fit("box_l", box, box, self.periodicity)
 
+    def _check_particles_inside(self, name, value, box, periodic):
+        """Refuse a box or periodicity that leaves particles outside the box
+        along an axis that is not periodic (as part.add refuses them)."""
+        closed = ~np.asarray(periodic, dtype=bool)
+        if not closed.any() or len(self.part) == 0:
+            return
+        pos = self.part.all().pos
+        outside = closed & ((pos < 0.0) | (pos > np.asarray(box, dtype=float)))
+        if outside.any():
+            k, axis = (int(i) for i in np.argwhere(outside)[0])
+            raise ValueError(f"System: parameter '{name}' {np.asarray(value).tolist()} leaves "
+                             f"{int(outside.any(axis=1).sum())} particles outside the box along the non-periodic "
+                             f"{'xyz'[axis]} (particle id {int(self.part.all().id[k])} at {pos[k, axis]:g}); move "
+                             f"them inside first")
+
     def _check_cells_fit(self, name, value, box, periodic):
         """Refuse a box or periodicity in which a cell the script holds would
         overlap its own periodic image."""
@@ -551,10 +578,12 @@ class System:
                 raise ValueError(f"System: parameter 'box_l' must be positive in every component, got {value!r}")
             check_not_metres("System: parameter 'box_l'", float(np.max(v)))
             self._check_box_change(v)
+            self._check_particles_inside("box_l", v, v, self.periodicity)
             self._core.box_l = v
         elif name == "periodicity":
             v = parse("System", [Param("periodicity", "bool3")], {"periodicity": value})["periodicity"]
             self._check_cells_fit("periodicity", v, self.box_l, v)
+            self._check_particles_inside("periodicity", v, self.box_l, v)
             self._core.periodicity = v
         elif name == "time_step":
             dt = parse("System", [Param("time_step", "float", check=positive)],
