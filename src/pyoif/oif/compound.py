@@ -48,24 +48,15 @@ def _inside(points, nodes, triangles):
 
 
 def _nearest_distance(points, nodes):
-    points = np.asarray(points, dtype=float)
-    best = np.full(len(points), np.inf)
-    for start in range(0, len(points), 256):
-        d = points[start:start + 256, None, :] - nodes[None, :, :]
-        best[start:start + 256] = np.sqrt(np.einsum("pni,pni->pn", d, d).min(axis=1))
-    return best
+    """Per point, the distance to the nearest node (unfolded positions)."""
+    from scipy.spatial import cKDTree
+    return cKDTree(np.asarray(nodes, dtype=float)).query(np.asarray(points, dtype=float))[0]
 
 
 def _contact(cell_types, scale):
     settings = _contacts.contact_settings(cell_types)["cell"]
     settings["a"] *= float(scale)
     return settings
-
-
-def _positive_scale(owner, scale):
-    if isinstance(scale, (bool, np.bool_)) or not isinstance(scale, (int, float, np.floating)) or not scale > 0:
-        raise ValueError(f"{owner}: parameter 'scale' must be a number > 0, got {scale!r}")
-    return float(scale)
 
 
 # -- nucleus ----------------------------------------------------------------------
@@ -88,7 +79,7 @@ def add_nucleus(cell, nucleus_type, particle_type, particle_mass=None, rotate=No
         raise ValueError(f"{owner}: the nucleus type belongs to another System than the cell")
     if getattr(cell, "nucleus", None) is not None:
         raise ValueError(f"{owner}: cell {cell.cell_id} already has a nucleus (cell {cell.nucleus.cell_id})")
-    scale = _positive_scale(owner, scale)
+    scale = _contacts.check_scale(owner, scale)
     nodes, triangles = _cell_nodes_and_triangles(cell)
     centre = nodes.mean(axis=0)
     placed = nucleus_type.mesh._placed_positions(centre, None if rotate is None else np.asarray(rotate, float))
@@ -205,7 +196,7 @@ class CellCluster:
         if isinstance(n_cells, bool) or not isinstance(n_cells, (int, np.integer)) or n_cells < 1:
             raise ValueError(f"{owner}: parameter 'n_cells' must be a whole number >= 1, got {n_cells!r}")
         centroid = _vec3(owner, "centroid", centroid)
-        scale = _positive_scale(owner, scale)
+        scale = _contacts.check_scale(owner, scale)
         types = list(range(n_cells)) if particle_types is None else [int(t) for t in particle_types]
         if len(types) != n_cells or len(set(types)) != n_cells:
             raise ValueError(f"{owner}: parameter 'particle_types' must give {n_cells} different types (one per "

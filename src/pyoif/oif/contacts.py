@@ -68,6 +68,13 @@ def packing_clearance(cell_types, scale=1.0, time_step=None, node_mass=None):
     return contact_offset(cell_types) + margin
 
 
+def check_scale(owner, scale):
+    """The contacts' force scale factor as a float, or ValueError naming `owner`."""
+    if isinstance(scale, (bool, np.bool_)) or not isinstance(scale, (int, float, np.floating)) or not scale > 0:
+        raise ValueError(f"{owner}: parameter 'scale' must be a number > 0, got {scale!r}")
+    return float(scale)
+
+
 def set_contacts(system, cell_types, particle_types, wall_types=(), scale=1.0):
     """Sets the advised hard_contact between every pair of the cells'
     particle types (including a type with itself: different cells of one
@@ -76,8 +83,7 @@ def set_contacts(system, cell_types, particle_types, wall_types=(), scale=1.0):
     where a scene stiffens its membranes to keep the capillary number at a
     faster flow, the contacts stiffen alike (the same gaps under the same
     relative load)."""
-    if isinstance(scale, (bool, np.bool_)) or not isinstance(scale, (int, float, np.floating)) or not scale > 0:
-        raise ValueError(f"set_contacts: parameter 'scale' must be a number > 0, got {scale!r}")
+    scale = check_scale("set_contacts", scale)
     settings = contact_settings(cell_types)
     for k in settings.values():
         k["a"] *= float(scale)

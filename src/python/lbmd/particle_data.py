@@ -211,20 +211,33 @@ class ParticleSlice(_ParticleView):
         return f"ParticleSlice({len(self)} particles, ids [{shown}])"
 
 
+def outside_closed_axes(pos, box, periodic):
+    """Positions outside the box along an axis that is not periodic (there
+    is no image to fold them into): None, or (row, axis, count) of the first
+    one and how many rows are outside."""
+    periodic = np.asarray(periodic, dtype=bool)
+    if periodic.all() or len(pos) == 0:
+        return None
+    outside = ~periodic & ((pos < 0.0) | (pos > np.asarray(box, dtype=float)))
+    if not outside.any():
+        return None
+    k, axis = (int(i) for i in np.argwhere(outside)[0])
+    return k, axis, int(outside.any(axis=1).sum())
+
+
 def _check_inside_closed_axes(owner, system, pos):
     """Refuse positions outside the box along an axis that is not periodic:
-    there is no image to fold them into, and the engine would lose them."""
-    periodic = np.asarray(system.periodicity, dtype=bool)
-    if periodic.all() or not np.all(np.isfinite(pos)):
+    the engine would lose them."""
+    if not np.all(np.isfinite(pos)):
         return  # (non-finite positions are refused by the engine, with their own message)
-    box = np.asarray(system.box_l, dtype=float)
-    outside = ~periodic & ((pos < 0.0) | (pos > box))
-    if outside.any():
-        k, axis = (int(i) for i in np.argwhere(outside)[0])
+    periodic, box = np.asarray(system.periodicity, dtype=bool), np.asarray(system.box_l, dtype=float)
+    found = outside_closed_axes(pos, box, periodic)
+    if found is not None:
+        k, axis, count = found
         name = "xyz"[axis]
         raise ValueError(f"{owner}: parameter 'pos': particle {k} at {name} = {pos[k, axis]:g} is outside the box "
                          f"(0..{box[axis]:g}) along {name}, which is not periodic (periodicity "
-                         f"{[bool(v) for v in periodic]}); {int(outside.any(axis=1).sum())} of {len(pos)} "
+                         f"{[bool(v) for v in periodic]}); {count} of {len(pos)} "
                          f"particles are outside: place them inside, or make {name} periodic")
 
 

@@ -545,15 +545,15 @@ class System:
     def _check_particles_inside(self, name, value, box, periodic):
         """Refuse a box or periodicity that leaves particles outside the box
         along an axis that is not periodic (as part.add refuses them)."""
-        closed = ~np.asarray(periodic, dtype=bool)
-        if not closed.any() or len(self.part) == 0:
+        from .particle_data import outside_closed_axes
+        if np.all(periodic) or len(self.part) == 0:
             return
         pos = self.part.all().pos
-        outside = closed & ((pos < 0.0) | (pos > np.asarray(box, dtype=float)))
-        if outside.any():
-            k, axis = (int(i) for i in np.argwhere(outside)[0])
+        found = outside_closed_axes(pos, box, periodic)
+        if found is not None:
+            k, axis, count = found
             raise ValueError(f"System: parameter '{name}' {np.asarray(value).tolist()} leaves "
-                             f"{int(outside.any(axis=1).sum())} particles outside the box along the non-periodic "
+                             f"{count} particles outside the box along the non-periodic "
                              f"{'xyz'[axis]} (particle id {int(self.part.all().id[k])} at {pos[k, axis]:g}); move "
                              f"them inside first")
 
